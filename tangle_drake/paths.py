@@ -1,0 +1,53 @@
+"""Where the project's files live: shipped models, trained weights and the generated-model cache.
+
+Models are found through Drake's ``PackageMap`` (``package://nextage/...``), never by absolute
+paths, so the same scenario files work from a source checkout and from a non-editable install.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from pydrake.multibody.parsing import PackageMap, Parser
+
+_PACKAGE_DIR = Path(__file__).resolve().parent
+
+
+def models_dir() -> Path:
+    """The directory holding ``nextage/package.xml``.
+
+    An installed wheel carries it as ``tangle_drake/models``; a source checkout has it at the
+    repository's top level, ``models/``.
+    """
+    for candidate in (_PACKAGE_DIR / "models", _PACKAGE_DIR.parent / "models"):
+        if (candidate / "nextage" / "package.xml").is_file():
+            return candidate
+    raise FileNotFoundError(
+        "cannot find models/nextage/package.xml next to the tangle_drake package; "
+        "reinstall tangle_drake (pip install .)"
+    )
+
+
+def register_packages(package_map: PackageMap) -> None:
+    """Make ``package://nextage/...`` resolvable in ``package_map``."""
+    if not package_map.Contains("nextage"):
+        package_map.AddPackageXml(str(models_dir() / "nextage" / "package.xml"))
+
+
+def make_parser(plant, scope_name: str | None = None) -> Parser:
+    """A ``Parser`` for ``plant`` that resolves the project's packages."""
+    parser = Parser(plant) if scope_name is None else Parser(plant, scope_name)
+    register_packages(parser.package_map())
+    return parser
+
+
+def cache_dir() -> Path:
+    """Directory for generated model files (parts, bins), keyed by content.
+
+    ``TANGLE_DRAKE_CACHE`` overrides the default ``~/.cache/tangle_drake``.
+    """
+    root = os.environ.get("TANGLE_DRAKE_CACHE")
+    path = Path(root) if root else Path.home() / ".cache" / "tangle_drake"
+    path.mkdir(parents=True, exist_ok=True)
+    return path
