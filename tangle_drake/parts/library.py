@@ -1,0 +1,173 @@
+"""`load_part`: a built-in wire part or a user's mesh file as a cached, Drake-ready SDF model."""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import math
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.parts import build, cache, mesh_import, wire
+from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_color, builtin_spec
+
+log = logging.getLogger(__name__)
+
+STEEL_DENSITY = 7850.0  # kg/m^3
+MESH_PART_COLOR = (0.62, 0.62, 0.66, 1.0)
+# Plausible part sizes (largest bounding-box side after scaling, metres).
+MIN_SIZE = 1e-3
+MAX_SIZE = 1.0
+
+
+@dataclass(frozen=True)
+class PartModel:
+    """A part's generated model. The body origin is the centre of mass (so `com` is zero);
+    the axes are those of the skeleton (wire parts lie in the x-y plane) or of the mesh file.
+    """
+
+    name: str  # "u_hook", or the mesh file's stem
+    sdf_path: Path  # self-contained SDFormat file in the cache (mesh URIs relative to it)
+    body_name: str  # "body"; the SDF's model name is `name`
+    mass: float  # kg
+    com: np.ndarray  # centre of mass in the body frame (3,)
+    inertia: np.ndarray  # 3x3 rotational inertia about the COM, body frame
+    bounding_radius: float  # radius of a sphere about the body origin enclosing the part, m
+    num_collision_pieces: int
+    visual_mesh_path: Path  # the one merged OBJ (with normals)
+
+
+def load_part(
+    part: str | os.PathLike[str], mesh_scale: float = 1.0, density: float | None = None
+) -> PartModel:
+    """A built-in name from BUILTIN_PARTS, or a path to an .obj/.stl/.ply mesh (with its scale).
+
+    `mesh_scale` converts the mesh file's units to metres (0.001 for millimetres); for a
+    built-in part it scales the whole part, wire included. `density` defaults to steel.
+    Files are generated once per distinct input and then read from the cache.
+
+    Meshes that are not watertight are repaired: normals fixed, then each hole closed with a
+    flat triangle fan (exact for holes that are flat, like a missing end face). One that is
+    still not watertight (edges shared by three faces, say) has no volume to integrate: its
+    mass properties then come from its convex hull at `density`, an upper bound (exact for a
+    convex part, too heavy by the volume of its concavities otherwise). Either repair logs
+    a warning, on every load; CoACD may also take much longer (up to minutes) on such a mesh.
+    """
+    scale = _positive("mesh_scale", mesh_scale)
+    rho = STEEL_DENSITY if density is None else _positive("density", density)
+    if str(part) in BUILTIN_PARTS:
+        return _load_builtin(str(part), scale, rho)
+    return _load_mesh_file(Path(part), scale, rho)
+
+
+def _positive(what: str, value: Any) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if isinstance(value, bool) or not math.isfinite(number) or number <= 0.0:
+        raise TangleDrakeError(f"{what} must be a positive number, got {value!r}")
+    return number
+
+
+def _check_size(what: str, size: float, scale: float) -> None:
+    if not MIN_SIZE <= size <= MAX_SIZE:
+        raise TangleDrakeError(
+            f"{what} is {size:.4g} m across after scaling by mesh_scale={scale:g}; parts must "
+            f"be {MIN_SIZE * 1e3:g} mm to {MAX_SIZE:g} m, so the scale is probably wrong "
+            "(mesh_scale converts the file's units to metres: 0.001 for millimetres)"
+        )
+
+
+def _load_builtin(name: str, scale: float, density: float) -> PartModel:
+    spec = builtin_spec(name).scaled(scale)
+    extent = float(np.ptp(wire.centre_line(spec), axis=0).max()) + spec.wire_diameter
+    _check_size(f"part {name!r}", extent, scale)
+    color = builtin_color(name)
+    key = cache.entry_key(
+        {"kind": "wire", "name": name, "spec": repr(spec), "color": color, "density": density}
+    )
+    entry, meta = cache.get_or_build(
+        key, lambda d: build.build_wire_part(d, name, spec, color, density)
+    )
+    return _model(entry, meta)
+
+
+def _load_mesh_file(path: Path, scale: float, density: float) -> PartModel:
+    suffix = path.suffix.lower()
+    if suffix not in mesh_import.MESH_SUFFIXES:
+        if not suffix and not path.exists():
+            raise TangleDrakeError(
+                f"unknown part {str(path)!r}: give a built-in part ({', '.join(BUILTIN_PARTS)}) "
+                "or a path to an .obj, .stl or .ply mesh file"
+            )
+        raise TangleDrakeError(
+            f"unsupported mesh format {path.suffix!r} for {path}: give an .obj, .stl or .ply file"
+        )
+    if not path.is_file():
+        raise TangleDrakeError(f"mesh file not found: {path}")
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise TangleDrakeError(f"cannot read mesh file {path}: {exc.strerror}") from exc
+    if not data.strip():
+        raise TangleDrakeError(f"mesh file {path} is empty")
+    name = re.sub(r"[^A-Za-z0-9_.-]", "_", path.stem) or "part"
+    key = cache.entry_key(
+        {
+            "kind": "mesh",
+            "name": name,
+            "suffix": suffix,
+            "sha256": hashlib.sha256(data).hexdigest(),
+            "scale": scale,
+            "density": density,
+            "coacd": mesh_import.COACD_PARAMS,
+        }
+    )
+
+    def generate(directory: Path) -> dict[str, Any]:
+        mesh, holes = mesh_import.read_mesh(data, suffix, path, scale)
+        _check_size(f"mesh file {path}", float(np.max(mesh.extents)), scale)
+        pieces = mesh_import.convex_pieces(mesh, path)
+        return build.build_mesh_part(
+            directory, name, mesh, pieces, MESH_PART_COLOR, density, holes
+        )
+
+    entry, meta = cache.get_or_build(key, generate)
+    if meta["holes_capped"] and meta["mass_from"] == build.MASS_FROM_MESH:
+        log.warning(
+            "mesh file %s had %d holes; closed them with flat triangle fans, so its mass "
+            "(%.4g kg) assumes flat patches there; give a closed mesh for exact values",
+            path,
+            meta["holes_capped"],
+            meta["mass"],
+        )
+    if meta["mass_from"] == build.MASS_FROM_HULL:
+        log.warning(
+            "mesh file %s is not watertight even after repair (holes filled, normals fixed): "
+            "its mass (%.4g kg) and inertia come from its convex hull, which overestimates "
+            "them by the volume of any concavities; give a closed mesh for exact values",
+            path,
+            meta["mass"],
+        )
+    return _model(entry, meta)
+
+
+def _model(entry: Path, meta: dict[str, Any]) -> PartModel:
+    return PartModel(
+        name=meta["name"],
+        sdf_path=entry / meta["sdf"],
+        body_name=meta["body_name"],
+        mass=float(meta["mass"]),
+        com=np.asarray(meta["com"], dtype=float),
+        inertia=np.asarray(meta["inertia"], dtype=float),
+        bounding_radius=float(meta["bounding_radius"]),
+        num_collision_pieces=int(meta["num_collision_pieces"]),
+        visual_mesh_path=entry / meta["visual"],
+    )
