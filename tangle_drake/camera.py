@@ -39,7 +39,7 @@ class CameraModel:
 
     def pixel_to_camera(self, u: np.ndarray | float, v: np.ndarray | float,
                         depth: np.ndarray | float) -> np.ndarray:
-        """Back-project pixel(s) at ``depth`` (m along +z) to points in the camera frame, (..., 3)."""
+        """Back-project pixel(s) at ``depth`` (m along +z) to camera-frame points, (..., 3)."""
         k = self.intrinsics
         u, v, depth = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float),
                                           np.asarray(depth, float))

@@ -11,22 +11,32 @@ from pathlib import Path
 
 from pydrake.multibody.parsing import PackageMap, Parser
 
+from tangle_drake.errors import TangleDrakeError
+
 _PACKAGE_DIR = Path(__file__).resolve().parent
 
 
-def models_dir() -> Path:
-    """The directory holding ``nextage/package.xml``.
+def _shipped_dir(name: str, marker: str) -> Path:
+    """A top-level directory of the repository that the wheel ships inside the package.
 
-    An installed wheel carries it as ``tangle_drake/models``; a source checkout has it at the
-    repository's top level, ``models/``.
+    An installed wheel carries it as ``tangle_drake/<name>``; a source checkout has it at the
+    repository's top level. ``marker`` is a file that must exist in it.
     """
-    for candidate in (_PACKAGE_DIR / "models", _PACKAGE_DIR.parent / "models"):
-        if (candidate / "nextage" / "package.xml").is_file():
+    for candidate in (_PACKAGE_DIR / name, _PACKAGE_DIR.parent / name):
+        if (candidate / marker).is_file():
             return candidate
-    raise FileNotFoundError(
-        "cannot find models/nextage/package.xml next to the tangle_drake package; "
-        "reinstall tangle_drake (pip install .)"
-    )
+    raise TangleDrakeError(f"cannot find {name}/{marker} next to the tangle_drake package; "
+                           "reinstall tangle_drake (pip install .)")
+
+
+def models_dir() -> Path:
+    """The directory holding ``nextage/package.xml``."""
+    return _shipped_dir("models", "nextage/package.xml")
+
+
+def diagrams_dir() -> Path:
+    """The directory holding the shipped scenarios (``pick_demo.yaml``, ...)."""
+    return _shipped_dir("diagrams", "pick_demo.yaml")
 
 
 def register_packages(package_map: PackageMap) -> None:

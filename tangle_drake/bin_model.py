@@ -1,0 +1,73 @@
+"""The bin the parts lie in: a floor and four walls on a stand, generated from ``BinConfig``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tangle_drake.scenario import BinConfig
+
+# Steel-on-painted-steel friction; the same number for the floor, walls and stand.
+_FRICTION = (0.5, 0.4)
+
+
+def bin_boxes(config: BinConfig) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Name -> (centre in world, full size) of each box of the bin, stand included."""
+    cx, cy = config.center
+    sx, sy = config.inner_size
+    t, h, f = config.wall_thickness, config.wall_height, config.floor_thickness
+    z0 = config.floor_height
+    wall_z = z0 + h / 2
+    return {
+        "floor": (np.array([cx, cy, z0 - f / 2]), np.array([sx + 2 * t, sy + 2 * t, f])),
+        "wall_front": (np.array([cx + (sx + t) / 2, cy, wall_z]), np.array([t, sy + 2 * t, h])),
+        "wall_back": (np.array([cx - (sx + t) / 2, cy, wall_z]), np.array([t, sy + 2 * t, h])),
+        "wall_left": (np.array([cx, cy + (sy + t) / 2, wall_z]), np.array([sx, t, h])),
+        "wall_right": (np.array([cx, cy - (sy + t) / 2, wall_z]), np.array([sx, t, h])),
+        "stand": (np.array([cx, cy, (z0 - f) / 2]), np.array([sx, sy, z0 - f])),
+    }
+
+
+def bin_sdf(config: BinConfig) -> str:
+    """SDFormat text of the bin as one static model named ``bin`` (welded to the world)."""
+    links = []
+    for name, (center, size) in bin_boxes(config).items():
+        colour = "0.35 0.37 0.4 1" if name != "stand" else "0.55 0.5 0.45 1"
+        box = f"<box><size>{size[0]:.6f} {size[1]:.6f} {size[2]:.6f}</size></box>"
+        links.append(f"""
+    <link name="{name}">
+      <pose>{center[0]:.6f} {center[1]:.6f} {center[2]:.6f} 0 0 0</pose>
+      <visual name="visual"><geometry>{box}</geometry>
+        <material><diffuse>{colour}</diffuse></material></visual>
+      <collision name="collision"><geometry>{box}</geometry>
+        <drake:proximity_properties>
+          <drake:mu_static>{_FRICTION[0]}</drake:mu_static>
+          <drake:mu_dynamic>{_FRICTION[1]}</drake:mu_dynamic>
+        </drake:proximity_properties></collision>
+    </link>""")
+    return f"""<?xml version="1.0"?>
+<sdf version="1.9" xmlns:drake="http://drake.mit.edu">
+  <model name="bin">
+    <static>true</static>{"".join(links)}
+  </model>
+</sdf>
+"""
+
+
+def inside_bin(config: BinConfig, p_W: np.ndarray, margin: float = 0.0) -> np.ndarray:
+    """Whether world point(s) (..., 3) lie above the bin's inner floor, ``margin`` from the walls.
+
+    A pile may rise above the walls and still be in the bin, so there is no upper bound.
+    """
+    p_W = np.asarray(p_W, float)
+    half = np.asarray(config.inner_size) / 2 - margin
+    d = np.abs(p_W[..., :2] - np.asarray(config.center))
+    return np.all(d <= half, axis=-1) & (p_W[..., 2] >= config.floor_height - 0.005)
+
+
+def inner_corners(config: BinConfig) -> np.ndarray:
+    """The inner floor's four corners in world coordinates, (4, 3)."""
+    cx, cy = config.center
+    hx, hy = np.asarray(config.inner_size) / 2
+    z = config.floor_height
+    return np.array([[cx - hx, cy - hy, z], [cx + hx, cy - hy, z],
+                     [cx + hx, cy + hy, z], [cx - hx, cy + hy, z]])

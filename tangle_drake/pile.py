@@ -1,0 +1,212 @@
+"""Random piles: drop the station's parts into the bin and simulate until they are at rest.
+
+Parts are placed one by one at random poses above the bin, each checked against the bin and
+the parts already placed with SceneGraph's penetration query, so nothing starts interpenetrating.
+After settling, parts that ended outside the bin or deeply inside another are dropped again;
+whatever still fails after ``max_redraws`` rounds is parked on the ground beside the robot and
+reported, never silently left in the bin.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from pydrake.common.eigen_geometry import Quaternion
+from pydrake.geometry import GeometryId, QueryObject
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.math import SpatialVelocity
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import Body
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import Context, Diagram
+
+from tangle_drake.bin_model import inside_bin
+from tangle_drake.scenario import BinConfig, PileConfig
+from tangle_drake.station import PLANT_NAME, pile_instances
+
+_CHECK_PERIOD = 0.05  # s of simulated time between rest checks
+_REST_CHECKS = 2  # consecutive checks at rest before the pile counts as settled
+_PLACEMENT_TRIES = 40  # random poses tried per height band before raising the band
+_BAND_HEIGHT = 0.03  # m, height of the band a part's centre is drawn from
+
+
+@dataclass
+class PileReport:
+    """What happened while making one pile."""
+
+    seed: int
+    num_parts: int
+    settle_time: float = 0.0
+    """Simulated seconds spent settling, all rounds together."""
+    wall_time: float = 0.0
+    redrawn: list[str] = field(default_factory=list)
+    """Parts that were dropped again after ending outside the bin or interpenetrating."""
+    parked: list[str] = field(default_factory=list)
+    """Parts that still failed after every redraw and were taken out of the bin."""
+    max_penetration: float = 0.0
+    settled: bool = False
+    """False if the time cap was reached before every part came to rest."""
+
+    @property
+    def num_in_bin(self) -> int:
+        return self.num_parts - len(self.parked)
+
+
+def part_bodies(plant: MultibodyPlant) -> list[Body]:
+    """The single body of each pile part, in pile order."""
+    return [plant.get_body(plant.GetBodyIndices(i)[0]) for i in pile_instances(plant)]
+
+
+def drop_pile(simulator: Simulator, bin_config: BinConfig, pile_config: PileConfig,
+              seed: int | None = None,
+              progress: Callable[[str], None] | None = None) -> PileReport:
+    """Make a settled random pile in ``simulator``'s context (a station diagram's simulator).
+
+    The station's input ports must already be fixed (e.g. the robot holding its pose). The same
+    seed on the same station gives the same pile.
+    """
+    seed = pile_config.seed if seed is None else seed
+    diagram: Diagram = simulator.get_system()
+    plant: MultibodyPlant = diagram.GetSubsystemByName(PLANT_NAME)
+    root = simulator.get_mutable_context()
+    bodies = part_bodies(plant)
+    report = PileReport(seed=seed, num_parts=len(bodies))
+    start = time.perf_counter()
+    rng = np.random.default_rng(seed)
+
+    placer = _Placer(diagram, plant, root, bin_config, bodies)
+    placer.stage(bodies)
+    to_drop = list(bodies)
+    for round_index in range(pile_config.max_redraws + 1):
+        for k in rng.permutation(len(to_drop)):
+            placer.place(to_drop[k], rng)
+        if progress:
+            progress(f"settling {len(to_drop)} part(s), round {round_index + 1}")
+        settled, duration = _settle(simulator, plant, bodies, pile_config)
+        report.settle_time += duration
+        report.settled = settled
+        failed = _failed_parts(plant, placer, bodies, bin_config, pile_config, report)
+        if not failed:
+            break
+        names = [plant.GetModelInstanceName(b.model_instance()) for b in failed]
+        if round_index == pile_config.max_redraws:
+            placer.park(failed)
+            report.parked = names
+            _settle(simulator, plant, bodies, pile_config)
+            break
+        report.redrawn.extend(names)
+        placer.stage(failed)
+        to_drop = failed
+    report.wall_time = time.perf_counter() - start
+    return report
+
+
+class _Placer:
+    """Places parts at collision-free random poses above the bin (or out of the way)."""
+
+    def __init__(self, diagram: Diagram, plant: MultibodyPlant, root: Context,
+                 bin_config: BinConfig, bodies: list[Body]) -> None:
+        self.plant = plant
+        self.root = root
+        self.context = plant.GetMyMutableContextFromRoot(root)
+        self.bin = bin_config
+        self.query_port = plant.get_geometry_query_input_port()
+        self.owner: dict[GeometryId, Body] = {}
+        for body in bodies:
+            for geometry in plant.GetCollisionGeometriesForBody(body):
+                self.owner[geometry] = body
+        self.bodies = bodies
+
+    def stage(self, bodies: list[Body]) -> None:
+        """Move parts far apart, far away, so unplaced parts touch nothing."""
+        for body in bodies:
+            index = self.bodies.index(body)
+            self._set(body, RigidTransform([50.0 + index, 50.0, 10.0]))
+
+    def park(self, bodies: list[Body]) -> None:
+        """Lay parts that cannot be placed in the bin on the ground, behind the robot."""
+        for body in bodies:
+            index = self.bodies.index(body)
+            self._set(body, RigidTransform([-1.5, -1.0 + 0.2 * index, 0.05]))
+
+    def place(self, body: Body, rng: np.random.Generator) -> None:
+        half = np.asarray(self.bin.inner_size) / 2
+        center = np.asarray(self.bin.center)
+        low = self.bin.floor_height + 0.01
+        for band in range(200):
+            for _ in range(_PLACEMENT_TRIES):
+                xy = center + rng.uniform(-half, half)
+                z = low + (band + rng.uniform()) * _BAND_HEIGHT
+                rotation = RotationMatrix(_random_quaternion(rng))
+                self._set(body, RigidTransform(rotation, [xy[0], xy[1], z]))
+                if not self._collides(body):
+                    return
+        raise RuntimeError("could not find a free pose above the bin for a pile part")
+
+    def _set(self, body: Body, X_WB: RigidTransform) -> None:
+        self.plant.SetFreeBodyPose(self.context, body, X_WB)
+        self.plant.SetFreeBodySpatialVelocity(self.context, body, SpatialVelocity.Zero())
+
+    def _collides(self, body: Body) -> bool:
+        query: QueryObject = self.query_port.Eval(self.context)
+        for pair in query.ComputePointPairPenetration():
+            if self.owner.get(pair.id_A) is body or self.owner.get(pair.id_B) is body:
+                return True
+        return False
+
+    def penetration_by_body(self) -> dict[int, float]:
+        """Deepest penetration each part is involved in, keyed by body index."""
+        query: QueryObject = self.query_port.Eval(self.context)
+        depth: dict[int, float] = {}
+        for pair in query.ComputePointPairPenetration():
+            for geometry in (pair.id_A, pair.id_B):
+                body = self.owner.get(geometry)
+                if body is not None:
+                    key = int(body.index())
+                    depth[key] = max(depth.get(key, 0.0), pair.depth)
+        return depth
+
+
+def _settle(simulator: Simulator, plant: MultibodyPlant, bodies: list[Body],
+            config: PileConfig) -> tuple[bool, float]:
+    """Advance until every part rests for a while or the time cap; (settled, seconds)."""
+    context = plant.GetMyContextFromRoot(simulator.get_context())
+    start = simulator.get_context().get_time()
+    at_rest = 0
+    while simulator.get_context().get_time() - start < config.settle_time_max:
+        simulator.AdvanceTo(simulator.get_context().get_time() + _CHECK_PERIOD)
+        speeds = [_speed(plant, context, body) for body in bodies]
+        at_rest = at_rest + 1 if max(speeds, default=0.0) < config.settle_speed else 0
+        if at_rest >= _REST_CHECKS:
+            return True, simulator.get_context().get_time() - start
+    return False, simulator.get_context().get_time() - start
+
+
+def _speed(plant: MultibodyPlant, context: Context, body: Body) -> float:
+    """A part's speed, its spin counted at the tip of a 5 cm lever, m/s."""
+    velocity = body.EvalSpatialVelocityInWorld(context)
+    return max(np.linalg.norm(velocity.translational()),
+               0.05 * np.linalg.norm(velocity.rotational()))
+
+
+def _failed_parts(plant: MultibodyPlant, placer: _Placer, bodies: list[Body],
+                  bin_config: BinConfig, config: PileConfig, report: PileReport) -> list[Body]:
+    context = placer.context
+    depth = placer.penetration_by_body()
+    report.max_penetration = max(depth.values(), default=0.0)
+    failed = []
+    for body in bodies:
+        p_WB = body.EvalPoseInWorld(context).translation()
+        if not inside_bin(bin_config, p_WB, margin=0.0) or \
+                depth.get(int(body.index()), 0.0) > config.max_penetration:
+            failed.append(body)
+    return failed
+
+
+def _random_quaternion(rng: np.random.Generator) -> Quaternion:
+    """Uniformly distributed orientation (normalised 4-D Gaussian)."""
+    q = rng.normal(size=4)
+    return Quaternion(q / np.linalg.norm(q))
