@@ -1,0 +1,122 @@
+"""The tangle dataset on disk: append-only ``.npz`` shards plus a manifest.
+
+A dataset directory holds ``manifest.json`` (what made the data: part, crop, gripper, settings)
+and one shard ``shard_<task>.npz`` per finished task (one settled pile and its lifts). Shards
+are written to a temporary name and renamed, so a killed run leaves only whole shards; a resumed
+run skips the tasks whose shards exist, so no sample is lost or duplicated. The shards are the
+truth; the manifest's ``samples`` count is a summary rebuilt from them.
+
+Every shard holds the same arrays, one row per sample (see ``SAMPLE_FIELDS``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from tangle_drake.errors import TangleDrakeError
+
+FORMAT_VERSION = 1
+MANIFEST = "manifest.json"
+
+SAMPLE_FIELDS: dict[str, np.dtype] = {
+    "crop": np.dtype(np.float32),           # (S, S) metric depth crop, metres (crops.py)
+    "label": np.dtype(np.int8),             # 1 = tangled, 0 = not tangled
+    "score": np.dtype(np.float32),          # graspability score in [0, 1]
+    "u": np.dtype(np.float32),              # candidate pixel column
+    "v": np.dtype(np.float32),              # candidate pixel row
+    "angle_deg": np.dtype(np.float32),      # closing direction in the image
+    "depth_m": np.dtype(np.float32),        # fingertip depth along the optical axis
+    "width_m": np.dtype(np.float32),        # opening width
+    "rank": np.dtype(np.int16),             # candidate's rank in the graspability top-k
+    "pile_seed": np.dtype(np.int64),        # seed of the pile (train/validation split key)
+    "task": np.dtype(np.int64),             # task index (one pile per task)
+    "num_in_region": np.dtype(np.int16),    # parts in the closing region
+    "num_lifted": np.dtype(np.int16),       # other parts that rose above the threshold
+    "num_hanging": np.dtype(np.int16),      # of those, how many hang from the target
+    "target": np.dtype(np.int16),           # pile index of the lifted part, -1 if none
+}
+OPTIONAL_FIELDS: dict[str, np.dtype] = {
+    "full_depth": np.dtype(np.float32),     # (H, W) whole depth image, if asked for
+}
+
+
+def shard_name(task: int) -> str:
+    return f"shard_{task:07d}.npz"
+
+
+def write_shard(directory: Path, task: int, samples: dict[str, np.ndarray]) -> Path:
+    """Atomically write one task's samples; all arrays must have the same first dimension."""
+    lengths = {name: len(array) for name, array in samples.items()}
+    if len(set(lengths.values())) > 1:
+        raise ValueError(f"shard arrays differ in length: {lengths}")
+    missing = set(SAMPLE_FIELDS) - set(samples)
+    if missing:
+        raise ValueError(f"shard lacks fields {sorted(missing)}")
+    arrays = {name: np.asarray(array, dtype=(SAMPLE_FIELDS | OPTIONAL_FIELDS)[name])
+              for name, array in samples.items()}
+    path = directory / shard_name(task)
+    fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp_", suffix=".npz")
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            np.savez(handle, **arrays)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def finished_tasks(directory: Path) -> set[int]:
+    """Tasks whose shards are on disk (whole, by construction)."""
+    return {int(p.stem.split("_")[1]) for p in directory.glob("shard_*.npz")}
+
+
+def write_manifest(directory: Path, info: dict) -> None:
+    """Write ``manifest.json`` atomically; ``info`` describes what made the data."""
+    info = {"format": FORMAT_VERSION, **info}
+    tmp = directory / (MANIFEST + ".tmp")
+    tmp.write_text(json.dumps(info, indent=2, sort_keys=True))
+    os.replace(tmp, directory / MANIFEST)
+
+
+def read_manifest(directory: Path) -> dict:
+    """The manifest of a dataset directory, with a clear error if there is none."""
+    path = Path(directory) / MANIFEST
+    try:
+        info = json.loads(path.read_text())
+    except FileNotFoundError as error:
+        raise TangleDrakeError(f"{directory} is not a tangle dataset (no {MANIFEST}); make "
+                               "one with `tangle-drake collect`") from error
+    except json.JSONDecodeError as error:
+        raise TangleDrakeError(f"{path} is corrupt: {error}") from error
+    if info.get("format") != FORMAT_VERSION:
+        raise TangleDrakeError(f"{path}: dataset format {info.get('format')!r} is not "
+                               f"{FORMAT_VERSION}; re-collect it with this version")
+    return info
+
+
+def load_samples(directory: Path, fields: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
+    """All samples of a dataset, concatenated in task order (fields default to SAMPLE_FIELDS)."""
+    directory = Path(directory)
+    read_manifest(directory)
+    fields = tuple(SAMPLE_FIELDS) if fields is None else fields
+    parts: dict[str, list[np.ndarray]] = {name: [] for name in fields}
+    for task in sorted(finished_tasks(directory)):
+        path = directory / shard_name(task)
+        try:
+            with np.load(path) as shard:
+                for name in fields:
+                    parts[name].append(shard[name])
+        except (OSError, ValueError, KeyError) as error:
+            raise TangleDrakeError(f"dataset shard {path} is unreadable ({error}); delete it "
+                                   "and resume the collection to redo that task") from error
+    return {name: (np.concatenate(chunks) if chunks else
+                   np.zeros((0,), dtype=(SAMPLE_FIELDS | OPTIONAL_FIELDS)[name]))
+            for name, chunks in parts.items()}
