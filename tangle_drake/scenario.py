@@ -24,8 +24,10 @@ from tangle_drake.errors import TangleDrakeError
 
 def _default_plant_config() -> MultibodyPlantConfig:
     # 2 ms or less: at 5 ms thin wire parts tunnel through the bin's floor (method.md).
+    # Hydroelastic with fallback: the gripper's compliant pads hold light wire parts, while
+    # part-on-part contact stays point contact (parts are rigid hydroelastic; see parts/sdf.py).
     return MultibodyPlantConfig(time_step=0.002, discrete_contact_approximation="sap",
-                                contact_model="point")
+                                contact_model="hydroelastic_with_fallback")
 
 
 def _default_camera() -> CameraConfig:
@@ -38,9 +40,10 @@ def _default_camera() -> CameraConfig:
 class BinConfig:
     """A rectangular open box on a fixed stand; sizes are inner sizes."""
 
-    center: list[float] = field(default_factory=lambda: [0.40, 0.15])
-    """World (x, y) of the inner floor's centre, m."""
-    floor_height: float = 0.80
+    center: list[float] = field(default_factory=lambda: [0.34, 0.22])
+    """World (x, y) of the inner floor's centre, m. The default is where the left arm reaches
+    every point of the bin with the gripper pointing down (``tools/nextage_reach.py``)."""
+    floor_height: float = 0.93
     """World z of the inner floor's top surface, m."""
     inner_size: list[float] = field(default_factory=lambda: [0.20, 0.28])
     """Inner extent along world (x, y), m."""
@@ -104,13 +107,17 @@ class Scenario:
     """Robot and gripper (e.g. ``package://nextage/nextage_with_gripper.dmd.yaml``); empty
     for a robot-less station such as the tangle-data simulator's."""
     initial_positions: dict[str, float] = field(default_factory=dict)
-    """Joint name -> initial position (rad or m) for the robot's joints; others start at 0."""
+    """Joint name -> initial position (rad or m); the robot's other joints start at
+    ``robot.HOME``."""
     bin: BinConfig = field(default_factory=BinConfig)
     pile: PileConfig = field(default_factory=PileConfig)
     camera: CameraConfig = field(default_factory=_default_camera)
     camera_height: float | None = 0.5
     """If set, the camera looks straight down from this height above the bin's floor centre
     and ``camera.X_PB`` is ignored; if null, ``camera.X_PB`` places it."""
+    view_cameras: list[CameraConfig] = field(default_factory=list)
+    """Extra colour cameras for people to look through (e.g. an overview of the robot); each
+    gives a port ``{name}.rgb_image`` and ``tangle-drake scene`` writes ``{name}.png``."""
     meshcat: bool = False
 
     def validate(self) -> None:
@@ -125,10 +132,15 @@ class Scenario:
         _require(self.camera.depth, "camera.depth", "must be true: graspability needs depth")
         _require(self.camera_height is None or self.camera_height > self.bin.wall_height,
                  "camera_height", "must be above the bin's walls")
-        try:
-            self.camera.MakeCameras()
-        except RuntimeError as error:
-            raise TangleDrakeError(f"scenario field 'camera': {error}") from error
+        for where, camera in [("camera", self.camera)] + [
+                (f"view_cameras[{i}]", c) for i, c in enumerate(self.view_cameras)]:
+            try:
+                camera.MakeCameras()
+            except RuntimeError as error:
+                raise TangleDrakeError(f"scenario field '{where}': {error}") from error
+        names = [c.name for c in self.view_cameras]
+        _require(len(set(names)) == len(names) and self.camera.name not in names,
+                 "view_cameras", "need names unique among all cameras")
 
 
 class _Tagged(typing.NamedTuple):

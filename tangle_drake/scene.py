@@ -33,6 +33,8 @@ class Scene:
     floor_depth: float
     """Depth of the bin's floor under the camera, m (what an empty bin reads)."""
     timings: dict[str, float]
+    views: dict[str, np.ndarray]
+    """The scenario's view cameras' colour images, by camera name."""
 
     @property
     def context(self) -> Context:
@@ -40,10 +42,13 @@ class Scene:
 
     def write(self, out: Path) -> None:
         """depth.npy (m), depth.png (16-bit mm, 0 = missing), rgb.png, camera.json, pile.json."""
+        out.mkdir(parents=True, exist_ok=True)
         np.save(out / "depth.npy", self.depth)
         millimetres = np.nan_to_num(self.depth * 1000.0, nan=0.0, posinf=0.0)
         cv2.imwrite(str(out / "depth.png"), np.clip(millimetres, 0, 65535).astype(np.uint16))
         cv2.imwrite(str(out / "rgb.png"), cv2.cvtColor(self.rgb, cv2.COLOR_RGB2BGR))
+        for name, image in self.views.items():
+            cv2.imwrite(str(out / f"{name}.png"), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
         save_camera_json(out / "camera.json", self.camera)
         (out / "pile.json").write_text(json.dumps(
             {"report": asdict(self.report), "parts": self.part_poses()}, indent=2))
@@ -70,9 +75,9 @@ def render_depth(station: Diagram, context: Context) -> np.ndarray:
     return depth
 
 
-def render_rgb(station: Diagram, context: Context) -> np.ndarray:
-    """The top camera's colour image, uint8 (H, W, 3) RGB."""
-    image = station.GetOutputPort("camera.rgb_image").Eval(context)
+def render_rgb(station: Diagram, context: Context, camera: str = "camera") -> np.ndarray:
+    """A camera's colour image, uint8 (H, W, 3) RGB (the top camera unless named)."""
+    image = station.GetOutputPort(f"{camera}.rgb_image").Eval(context)
     return np.array(image.data, copy=True)[:, :, :3]
 
 
@@ -96,4 +101,6 @@ def make_scene(scenario: Scenario, seed: int | None = None,
     rgb = render_rgb(station, simulator.get_context())
     camera = camera_model(scenario)
     floor_depth = float(camera.X_WC[2, 3] - scenario.bin.floor_height)
-    return Scene(station, simulator, report, camera, depth, rgb, floor_depth, timings)
+    views = {config.name: render_rgb(station, simulator.get_context(), config.name)
+             for config in scenario.view_cameras}
+    return Scene(station, simulator, report, camera, depth, rgb, floor_depth, timings, views)

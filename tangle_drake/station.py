@@ -37,13 +37,14 @@ from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, Multibod
 from pydrake.multibody.tree import ModelInstanceIndex
 from pydrake.systems.framework import Context, Diagram, DiagramBuilder
 from pydrake.systems.primitives import MatrixGain, StateInterpolatorWithDiscreteDerivative
-from pydrake.systems.sensors import RgbdSensor
+from pydrake.systems.sensors import CameraConfig, RgbdSensor
 
 from tangle_drake.bin_model import bin_sdf
 from tangle_drake.camera import CameraIntrinsics, CameraModel, top_view_pose
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import load_part
 from tangle_drake.paths import make_parser
+from tangle_drake.robot import HOME
 from tangle_drake.scenario import Scenario
 
 PLANT_NAME = "plant"
@@ -122,6 +123,8 @@ def build_station(scenario: Scenario, meshcat: Meshcat | None = None) -> Diagram
     if plant.HasModelInstanceNamed("gripper"):
         _export_gripper(builder, plant, plant.GetModelInstanceByName("gripper"))
     _add_camera(builder, scene_graph, scenario)
+    for config in scenario.view_cameras:
+        _add_view_camera(builder, scene_graph, config)
 
     builder.ExportOutput(plant.get_state_output_port(), "sim.plant_state")
     builder.ExportOutput(plant.get_body_poses_output_port(), "sim.body_poses")
@@ -135,6 +138,8 @@ def build_station(scenario: Scenario, meshcat: Meshcat | None = None) -> Diagram
 
 
 def _set_initial_positions(plant: MultibodyPlant, scenario: Scenario) -> None:
+    if plant.HasModelInstanceNamed("nextage"):
+        plant.SetDefaultPositions(plant.GetModelInstanceByName("nextage"), HOME)
     for name, value in scenario.initial_positions.items():
         if not plant.HasJointNamed(name):
             raise TangleDrakeError(f"scenario field 'initial_positions': no joint named {name!r}")
@@ -178,17 +183,27 @@ def _export_gripper(builder: DiagramBuilder, plant: MultibodyPlant,
     builder.ExportOutput(width.get_output_port(), "gripper.state_measured")
 
 
-def _add_camera(builder: DiagramBuilder, scene_graph, scenario: Scenario) -> None:
-    config = scenario.camera
-    renderer = config.renderer_name
-    if not scene_graph.HasRenderer(renderer):
-        scene_graph.AddRenderer(renderer, MakeRenderEngineVtk(RenderEngineVtkParams()))
+def _add_sensor(builder: DiagramBuilder, scene_graph, config: CameraConfig,
+                X_WB: RigidTransform) -> RgbdSensor:
+    if not scene_graph.HasRenderer(config.renderer_name):
+        scene_graph.AddRenderer(config.renderer_name,
+                                MakeRenderEngineVtk(RenderEngineVtkParams()))
     color, depth = config.MakeCameras()
-    X_WB = camera_body_pose(scenario)
     sensor = builder.AddNamedSystem(
-        config.name,
-        RgbdSensor(scene_graph.world_frame_id(), X_WB, color, depth))
+        config.name, RgbdSensor(scene_graph.world_frame_id(), X_WB, color, depth))
     builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
+    return sensor
+
+
+def _add_view_camera(builder: DiagramBuilder, scene_graph, config: CameraConfig) -> None:
+    if config.X_PB.base_frame not in (None, "", "world"):
+        raise TangleDrakeError(f"view camera {config.name!r}: X_PB must be in the world frame")
+    sensor = _add_sensor(builder, scene_graph, config, config.X_PB.GetDeterministicValue())
+    builder.ExportOutput(sensor.color_image_output_port(), f"{config.name}.rgb_image")
+
+
+def _add_camera(builder: DiagramBuilder, scene_graph, scenario: Scenario) -> None:
+    sensor = _add_sensor(builder, scene_graph, scenario.camera, camera_body_pose(scenario))
     builder.ExportOutput(sensor.color_image_output_port(), "camera.rgb_image")
     builder.ExportOutput(sensor.depth_image_32F_output_port(), "camera.depth_image")
     builder.ExportOutput(sensor.label_image_output_port(), "sim.camera.label_image")

@@ -17,7 +17,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "scene", help="drop a random pile in the station and write the camera's images",
         description="Build the simulated station from a scenario, drop and settle a random "
                     "pile, and write the top camera's depth (metres: depth.npy and millimetres: "
-                    "depth.png, 16-bit), colour image, camera.json and pile.json to --out.")
+                    "depth.png, 16-bit), colour image, camera.json, pile.json and the scenario's "
+                    "view cameras' images to --out.")
     add_scenario_argument(parser)
     parser.add_argument("--out", type=Path, default=Path("out/scene"),
                         help="output directory (default: out/scene)")
@@ -42,7 +43,8 @@ def run(args: argparse.Namespace) -> int:
     scene = make_scene(scenario, seed=args.seed, progress=print)
     start = time.perf_counter()
     scene.write(out)
-    print(f"wrote {out}/depth.npy, depth.png, rgb.png, camera.json, pile.json "
+    views = "".join(f", {name}.png" for name in scene.views)
+    print(f"wrote {out}/depth.npy, depth.png, rgb.png{views}, camera.json, pile.json "
           f"({time.perf_counter() - start:.2f} s)")
     report = scene.report
     print(f"pile: {report.num_in_bin}/{report.num_parts} parts in the bin, "

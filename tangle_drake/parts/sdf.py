@@ -1,9 +1,11 @@
 """SDFormat text for a one-link part: inertia, one visual mesh, capsule or convex-mesh collisions.
 
 Contact: every collision gets ``drake:proximity_properties`` with steel-on-steel Coulomb
-friction (static 0.5, dynamic 0.4). No hydroelastic properties are declared, so with Drake's
-default ``hydroelastic_with_fallback`` contact model these parts always use point contact
-(capsules and small convex pieces are what point contact handles well and fast).
+friction (static 0.5, dynamic 0.4) and is declared *rigid hydroelastic*. Under Drake's
+``hydroelastic_with_fallback`` model, part-on-part and part-on-bin contacts (rigid against
+rigid) fall back to point contact, which capsules handle well and fast, while the gripper's
+compliant-hydroelastic finger pads get a contact patch. With point contact alone SAP softens a
+~10 g wire's contact so much at 2 ms that the fingers crush through it and it drops.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from tangle_drake.parts.wire import CapsuleSpec
 MU_STATIC = 0.5
 MU_DYNAMIC = 0.4
 BODY_NAME = "body"
+_MESH_RESOLUTION_HINT = 0.003  # m; only meshes Drake must tessellate use it (not convex pieces)
 
 
 def _num(x: float) -> str:
@@ -42,11 +45,13 @@ def _capsule_pose(capsule: CapsuleSpec) -> tuple[np.ndarray, np.ndarray, float]:
     return (capsule.start + capsule.end) / 2.0, np.array([0.0, pitch, yaw]), length
 
 
-def _friction() -> str:
+def _friction(resolution_hint: float) -> str:
     return (
         "<drake:proximity_properties>"
         f"<drake:mu_static>{_num(MU_STATIC)}</drake:mu_static>"
         f"<drake:mu_dynamic>{_num(MU_DYNAMIC)}</drake:mu_dynamic>"
+        "<drake:rigid_hydroelastic/>"
+        f"<drake:mesh_resolution_hint>{_num(resolution_hint)}</drake:mesh_resolution_hint>"
         "</drake:proximity_properties>"
     )
 
@@ -70,7 +75,7 @@ def write_part_sdf(
             f"        <pose>{_vec(centre)} {_vec(rpy)}</pose>\n"
             f"        <geometry><capsule><radius>{_num(capsule.radius)}</radius>"
             f"<length>{_num(length)}</length></capsule></geometry>\n"
-            f"        {_friction()}\n"
+            f"        {_friction(capsule.radius)}\n"
             "      </collision>\n"
         )
     for k, uri in enumerate(convex_uris):
@@ -78,7 +83,7 @@ def write_part_sdf(
             f'      <collision name="convex_{k:02d}">\n'
             f"        <geometry><mesh><uri>{escape(uri)}</uri><drake:declare_convex/></mesh>"
             "</geometry>\n"
-            f"        {_friction()}\n"
+            f"        {_friction(_MESH_RESOLUTION_HINT)}\n"
             "      </collision>\n"
         )
     text = (
