@@ -1,0 +1,40 @@
+"""Classification metrics of *tangled* (the positive class), numpy only.
+
+Undefined values (precision with no positive prediction, recall or ROC-AUC without both
+classes) are ``None``, which JSON logs can hold and NaN cannot.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def roc_auc(labels: np.ndarray, scores: np.ndarray) -> float | None:
+    """Area under the ROC curve of ``scores`` for the positive ``labels`` (1 / True).
+
+    The probability that a random positive scores above a random negative, ties counting
+    half (Mann-Whitney U with mid-ranks): exact, no threshold sweep.
+    """
+    positive = np.asarray(labels).astype(bool)
+    n_positive = int(positive.sum())
+    n_negative = positive.size - n_positive
+    if n_positive == 0 or n_negative == 0:
+        return None
+    _, inverse, counts = np.unique(np.asarray(scores), return_inverse=True, return_counts=True)
+    last_rank = np.cumsum(counts)
+    mid_rank = last_rank - (counts - 1) / 2
+    rank_sum = float(mid_rank[inverse.ravel()][positive].sum())
+    return (rank_sum - n_positive * (n_positive + 1) / 2) / (n_positive * n_negative)
+
+
+def binary_metrics(labels: np.ndarray, p_tangled: np.ndarray) -> dict[str, float | None]:
+    """Accuracy, precision, recall (threshold 0.5, i.e. the softmax's argmax) and ROC-AUC."""
+    truth = np.asarray(labels).astype(bool)
+    predicted = np.asarray(p_tangled) > 0.5
+    true_positive = int((truth & predicted).sum())
+    return {
+        "accuracy": float((truth == predicted).mean()) if truth.size else None,
+        "precision": true_positive / int(predicted.sum()) if predicted.any() else None,
+        "recall": true_positive / int(truth.sum()) if truth.any() else None,
+        "auc": roc_auc(truth, p_tangled),
+    }

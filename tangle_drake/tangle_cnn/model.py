@@ -1,0 +1,77 @@
+"""A trained tangle CNN ready to score grasp candidates: ``load_tangle_model(path)``."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.crops import CropSpec
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.tangle_cnn.candidate_crops import candidate_crops
+from tangle_drake.tangle_cnn.checkpoint import network_from, read_checkpoint
+from tangle_drake.tangle_cnn.network import TangleNet
+from tangle_drake.tangle_cnn.normalise import Normalisation
+
+
+class TangleModel:
+    """The network in eval mode on the CPU, with the crop spec and normalisation it was trained
+    with, so callers hand over metric crops or whole depth images and never normalise."""
+
+    def __init__(self, network: TangleNet, crop: CropSpec, normalisation: Normalisation,
+                 info: dict | None = None) -> None:
+        if crop.size_px != network.config.input_size:
+            raise TangleDrakeError(f"crop of {crop.size_px} px does not fit the network's "
+                                   f"{network.config.input_size} px input")
+        self.network = network.eval()
+        self.crop = crop
+        self.normalisation = normalisation
+        self.info = info or {}
+        """The checkpoint's metadata (everything but the weights)."""
+
+    def predict(self, crops: np.ndarray, grasp_depths: np.ndarray) -> np.ndarray:
+        """P(not tangled), (N,) float32, of (N, S, S) metric crops at (N,) fingertip depths."""
+        crops = np.asarray(crops, dtype=np.float32)
+        grasp_depths = np.asarray(grasp_depths, dtype=np.float32)
+        size = self.crop.size_px
+        if crops.ndim != 3 or crops.shape[1:] != (size, size):
+            raise TangleDrakeError(f"crops must be (N, {size}, {size}), got {crops.shape}")
+        if grasp_depths.shape != (len(crops),):
+            raise TangleDrakeError(f"grasp depths must be ({len(crops)},), got "
+                                   f"{grasp_depths.shape}")
+        if not (np.isfinite(crops).all() and np.isfinite(grasp_depths).all()):
+            raise TangleDrakeError("crops and grasp depths must be finite (extract_crop fills "
+                                   "missing pixels)")
+        if len(crops) == 0:
+            return np.zeros(0, dtype=np.float32)
+        x = torch.from_numpy(self.normalisation.apply(crops, grasp_depths)).unsqueeze(1)
+        with torch.inference_mode():
+            return torch.softmax(self.network(x), dim=1)[:, 0].numpy()
+
+    def predict_candidates(self, depth_image: np.ndarray, intrinsics: CameraIntrinsics,
+                           candidates: Sequence[Any]) -> np.ndarray:
+        """P(not tangled) per candidate (anything with ``u, v, angle_deg, depth_m``)."""
+        crops = candidate_crops(depth_image, intrinsics, candidates, self.crop)
+        return self.predict(crops, np.array([c.depth_m for c in candidates], dtype=np.float32))
+
+
+def load_tangle_model(path: Path | str) -> TangleModel:
+    """The model in a checkpoint written by ``tangle-drake train``; ``TangleDrakeError`` if the
+    file is missing, corrupt, of another kind or version, or its weights do not fit."""
+    path = Path(path)
+    data = read_checkpoint(path)
+    network = network_from(data["network"], data["state_dict"], path)
+    try:
+        crop = CropSpec(float(data["crop"]["size_m"]), int(data["crop"]["size_px"]))
+        normalisation = Normalisation(**data["normalisation"])
+    except (TypeError, KeyError, ValueError) as error:
+        raise TangleDrakeError(f"{path}: invalid crop spec or normalisation: {error}") from None
+    try:
+        return TangleModel(network, crop, normalisation,
+                           {key: value for key, value in data.items() if key != "state_dict"})
+    except TangleDrakeError as error:
+        raise TangleDrakeError(f"{path}: {error}") from None

@@ -1,0 +1,91 @@
+"""Export a trained tangle CNN to ONNX, for runtimes without torch (C++, other robots' PCs).
+
+The ONNX graph takes what ``TangleModel.predict`` takes and returns what it returns:
+inputs ``crops`` (N, S, S) float32 metric crops and ``grasp_depths`` (N,) float32 fingertip
+depths, output ``p_not_tangled`` (N,); N is dynamic. The normalisation is inside the graph,
+and the crop spec and normalisation are in the model's metadata (``tangle_drake.*`` keys), so
+the file alone says how to cut its input. Needs the ``onnx`` extra (onnx, onnxscript;
+onnxruntime to check the result).
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import torch
+from torch import nn
+
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.tangle_cnn.model import TangleModel
+from tangle_drake.tangle_cnn.network import TangleNet
+from tangle_drake.tangle_cnn.normalise import Normalisation
+
+OPSET = 18
+INPUTS = ("crops", "grasp_depths")
+OUTPUT = "p_not_tangled"
+
+
+class _ProbabilityGraph(nn.Module):
+    """Normalisation + network + softmax: the whole of ``TangleModel.predict`` in torch."""
+
+    def __init__(self, network: TangleNet, normalisation: Normalisation) -> None:
+        super().__init__()
+        self.network = network
+        self.normalisation = normalisation
+
+    def forward(self, crops: torch.Tensor, grasp_depths: torch.Tensor) -> torch.Tensor:
+        x = self.normalisation.apply(crops, grasp_depths).unsqueeze(1)
+        return torch.softmax(self.network(x), dim=1)[:, 0]
+
+
+def export_onnx(model: TangleModel, out: Path) -> None:
+    """Write ``model`` as one self-contained ONNX file (weights inside) at ``out``."""
+    try:
+        import onnx
+    except ImportError:
+        raise TangleDrakeError("ONNX export needs the onnx extra: pip install "
+                               "'tangle_drake[onnx]'") from None
+    size = model.crop.size_px
+    example = (torch.zeros(2, size, size), torch.zeros(2))
+    batch = torch.export.Dim("batch")
+    graph = _ProbabilityGraph(model.network, model.normalisation).eval()
+    try:
+        with warnings.catch_warnings():  # torch-internal notices, nothing a user can act on
+            warnings.filterwarnings("ignore", message=".*LeafSpec", category=FutureWarning)
+            warnings.filterwarnings("ignore", message=".*axis name: batch will not be used")
+            program = torch.onnx.export(
+                graph, example, dynamo=True, opset_version=OPSET, input_names=list(INPUTS),
+                output_names=[OUTPUT], dynamic_shapes={"crops": {0: batch},
+                                                       "grasp_depths": {0: batch}},
+                external_data=False, verbose=False)
+    except ImportError as error:
+        raise TangleDrakeError(f"ONNX export needs the onnx extra ({error}): pip install "
+                               "'tangle_drake[onnx]'") from None
+    proto = program.model_proto
+    metadata = {"tangle_drake.crop": json.dumps({"size_m": model.crop.size_m, "size_px": size}),
+                "tangle_drake.normalisation": json.dumps(model.normalisation.to_dict()),
+                "tangle_drake.part": json.dumps(model.info.get("part"))}
+    onnx.helper.set_model_props(proto, metadata)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    onnx.save_model(proto, str(out))
+
+
+def onnx_disagreement(model: TangleModel, onnx_path: Path, samples: int = 64,
+                      seed: int = 0) -> float:
+    """Largest |P_onnx - P_torch| over random crops around the fingertip level (onnxruntime)."""
+    try:
+        import onnxruntime
+    except ImportError:
+        raise TangleDrakeError("checking the ONNX file needs onnxruntime: pip install "
+                               "'tangle_drake[onnx]'") from None
+    rng = np.random.default_rng(seed)
+    size = model.crop.size_px
+    depths = rng.uniform(0.5, 1.5, samples).astype(np.float32)
+    crops = (depths[:, None, None] + rng.uniform(-0.08, 0.04, (samples, size, size))) \
+        .astype(np.float32)
+    session = onnxruntime.InferenceSession(str(onnx_path), providers=["CPUExecutionProvider"])
+    (p_onnx,) = session.run([OUTPUT], {"crops": crops, "grasp_depths": depths})
+    return float(np.abs(p_onnx - model.predict(crops, depths)).max())

@@ -1,0 +1,125 @@
+"""A dataset directory -> checked, split, balanced and normalised training data.
+
+Reads what ``tangle-drake collect`` writes (``tangle_drake.dataset``). From the manifest it
+takes ``crop`` (``{"size_m", "size_px"}``, required: inference must crop as the data did),
+``gripper`` (a ``GripperSpec`` as a dict; the default gripper if absent) and ``part``.
+Every problem with the data is a ``TangleDrakeError`` naming the directory.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from tangle_drake.crops import CropSpec
+from tangle_drake.dataset import load_samples, read_manifest
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.tangle_cnn.normalise import Normalisation
+from tangle_drake.tangle_cnn.split import split_by_pile, undersample
+
+FIELDS = ("crop", "label", "depth_m", "pile_seed")
+
+
+@dataclass(frozen=True)
+class TrainingData:
+    """All samples' network inputs and labels, and which of them train and validate."""
+
+    inputs: torch.Tensor
+    """(N, S, S) normalised crops, float32, on the CPU."""
+    labels: np.ndarray
+    """(N,) int64, 1 = tangled."""
+    train: np.ndarray
+    """Indices of the training part (whole piles, classes balanced)."""
+    validation: np.ndarray
+    """Indices of the validation part (the other piles, classes balanced)."""
+    crop: CropSpec
+    gripper: dict
+    part: str | None
+    summary: dict
+    """Path, content fingerprint, counts and the manifest: stored in the checkpoint."""
+
+
+def load_training_data(directory: Path, normalisation: Normalisation,
+                       validation_fraction: float, seed: int) -> TrainingData:
+    """Load ``directory``, split it by pile with ``seed`` and undersample each part's classes."""
+    directory = Path(directory)
+    manifest = read_manifest(directory)
+    samples = load_samples(directory, FIELDS)
+    crops, labels = samples["crop"], samples["label"].astype(np.int64)
+    depths, piles = samples["depth_m"], samples["pile_seed"]
+    if len(labels) == 0:
+        raise TangleDrakeError(f"dataset {directory} has no samples yet; collect some first")
+    if crops.ndim != 3 or crops.shape[1] != crops.shape[2]:
+        raise TangleDrakeError(f"dataset {directory}: crops have shape {crops.shape[1:]}, "
+                               "not square")
+    crop = _crop_spec(manifest, crops.shape[1], directory)
+    if not np.isin(labels, (0, 1)).all():
+        raise TangleDrakeError(f"dataset {directory}: labels must be 0 or 1")
+    counts = np.bincount(labels, minlength=2)
+    if counts.min() == 0:
+        only = "tangled" if counts[1] else "not tangled"
+        raise TangleDrakeError(f"dataset {directory} holds only {only} samples; the CNN needs "
+                               "both classes")
+    if not (np.isfinite(crops).all() and np.isfinite(depths).all() and (depths > 0).all()):
+        raise TangleDrakeError(f"dataset {directory}: crops and depths must be finite, "
+                               "depths positive")
+    try:
+        train_all, validation_all = split_by_pile(piles, validation_fraction, seed)
+    except ValueError:
+        raise TangleDrakeError(f"dataset {directory} holds a single pile; a split by pile "
+                               "needs two or more") from None
+    train = undersample(train_all, labels, seed)
+    validation = undersample(validation_all, labels, seed)
+    for name, part in (("training", train), ("validation", validation)):
+        if len(part) == 0:
+            raise TangleDrakeError(f"dataset {directory}: the {name} piles hold only one class; "
+                                   "collect more piles")
+    summary = {
+        "path": str(directory),
+        "fingerprint": _fingerprint(samples),
+        "samples": len(labels),
+        "tangled": int(counts[1]),
+        "piles": len(np.unique(piles)),
+        "train_samples": len(train),
+        "train_piles": len(np.unique(piles[train])),
+        "validation_samples": len(validation),
+        "validation_piles": len(np.unique(piles[validation])),
+        "manifest": manifest,
+    }
+    return TrainingData(
+        inputs=torch.from_numpy(normalisation.apply(crops, depths).astype(np.float32, copy=False)),
+        labels=labels, train=train, validation=validation, crop=crop,
+        gripper=manifest.get("gripper", asdict(DEFAULT_GRIPPER)),
+        part=manifest.get("part"), summary=summary)
+
+
+def _crop_spec(manifest: dict, size_px: int, directory: Path) -> CropSpec:
+    """The manifest's crop spec, checked against the crops' size."""
+    info = manifest.get("crop")
+    try:
+        crop = CropSpec(float(info["size_m"]), int(info.get("size_px", size_px)))
+        if not crop.size_m > 0:
+            raise ValueError
+    except (TypeError, KeyError, ValueError, AttributeError):
+        raise TangleDrakeError(f"dataset {directory}: the manifest lacks a valid crop spec "
+                               "(crop: {size_m > 0, size_px}); inference must crop as the "
+                               "data did") from None
+    if crop.size_px != size_px:
+        raise TangleDrakeError(f"dataset {directory}: the manifest's crop is {crop.size_px} px "
+                               f"but the stored crops are {size_px} px")
+    return crop
+
+
+def _fingerprint(samples: dict[str, np.ndarray]) -> str:
+    """SHA-256 of the arrays training reads: a resumed run must see the same data."""
+    digest = hashlib.sha256()
+    for name in FIELDS:
+        array = np.ascontiguousarray(samples[name])
+        digest.update(f"{name}{array.dtype}{array.shape}".encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()
