@@ -1,0 +1,129 @@
+"""The station built from the shipped pick_demo scenario: ports, robot control, the commands."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from tangle_drake.cli import main
+from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.paths import diagrams_dir
+from tangle_drake.robot import HOME, LEFT_ARM
+from tangle_drake.scenario import PartCount, load_scenario
+from tangle_drake.station import build_station, camera_model, hold_robot_still
+
+STATION_PORTS = {
+    "inputs": ["nextage.position", "gripper.position"],
+    "outputs": ["nextage.position_measured", "nextage.state_measured", "gripper.state_measured",
+                "camera.rgb_image", "camera.depth_image"],
+}
+
+
+@pytest.fixture(scope="module")
+def demo_scenario():
+    scenario = load_scenario(diagrams_dir() / "pick_demo.yaml")
+    scenario.pile.parts = [PartCount(part="u_hook", count=3)]
+    scenario.view_cameras = []
+    return scenario
+
+
+def test_station_has_the_documented_ports(demo_scenario):
+    station = build_station(demo_scenario)
+    inputs = [station.get_input_port(i).get_name() for i in range(station.num_input_ports())]
+    outputs = [station.get_output_port(i).get_name() for i in range(station.num_output_ports())]
+    assert inputs == STATION_PORTS["inputs"]
+    assert set(STATION_PORTS["outputs"]) <= set(outputs)
+    assert all(name.startswith("sim.") for name in set(outputs) - set(STATION_PORTS["outputs"]))
+    assert station.GetInputPort("nextage.position").size() == 15
+    assert station.GetInputPort("gripper.position").size() == 1
+    assert station.GetOutputPort("gripper.state_measured").size() == 2
+
+
+def test_robot_follows_position_commands_and_the_gripper_opens_and_closes(demo_scenario):
+    station = build_station(demo_scenario)
+    simulator = Simulator(station)
+    context = simulator.get_mutable_context()
+    hold_robot_still(station, context)
+    measured = station.GetOutputPort("nextage.position_measured")
+    np.testing.assert_allclose(measured.Eval(context), HOME, atol=1e-9)
+
+    target = HOME.copy()
+    target[LEFT_ARM.start] += 0.1
+    station.GetInputPort("nextage.position").FixValue(context, target)
+    station.GetInputPort("gripper.position").FixValue(context, [0.0])
+    simulator.AdvanceTo(1.0)
+    np.testing.assert_allclose(measured.Eval(context), target, atol=2e-3)
+    width = station.GetOutputPort("gripper.state_measured").Eval(context)[0]
+    assert width == pytest.approx(0.0, abs=0.002)
+
+    station.GetInputPort("gripper.position").FixValue(context, [DEFAULT_GRIPPER.max_opening])
+    simulator.AdvanceTo(1.6)
+    width = station.GetOutputPort("gripper.state_measured").Eval(context)[0]
+    assert width == pytest.approx(DEFAULT_GRIPPER.max_opening, abs=0.002)
+
+
+def test_camera_model_looks_down_at_the_bin(demo_scenario):
+    camera = camera_model(demo_scenario)
+    centre = [*demo_scenario.bin.center, demo_scenario.bin.floor_height]
+    u, v, depth = camera.world_to_pixel(np.array(centre))
+    assert (u, v) == pytest.approx(((640 - 1) / 2, (480 - 1) / 2), abs=0.5)
+    assert depth == pytest.approx(demo_scenario.camera_height)
+
+
+def test_scene_command_writes_metric_images(tmp_path):
+    scenario = tmp_path / "small.yaml"
+    scenario.write_text((diagrams_dir() / "pile_only.yaml").read_text().replace(
+        "count: 15", "count: 4"))
+    out = tmp_path / "scene"
+    assert main(["scene", "--scenario", str(scenario), "--out", str(out), "--seed", "2"]) == 0
+    depth = np.load(out / "depth.npy")
+    assert depth.dtype == np.float32 and depth.shape == (480, 640)
+    camera = json.loads((out / "camera.json").read_text())
+    floor = camera["X_WC"][2][3] - 0.93
+    assert np.nanmax(depth) == pytest.approx(floor, abs=0.002)
+    pile = json.loads((out / "pile.json").read_text())
+    assert len(pile["parts"]) == 4 and pile["report"]["parked"] == []
+    for name in ("depth.png", "rgb.png"):
+        assert (out / name).stat().st_size > 1000
+
+
+def test_scene_command_reports_a_bad_scenario_without_a_traceback(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("pile: {parts: [{part: u_hook, count: lots}]}\n")
+    assert main(["scene", "--scenario", str(bad), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "pile.parts[0].count" in err and "Traceback" not in err
+
+
+def test_diagram_command_writes_graphviz(tmp_path):
+    out = tmp_path / "station.dot"
+    assert main(["diagram", "--scenario", "pile_only.yaml", "--out", str(out)]) == 0
+    text = out.read_text()
+    assert text.startswith("digraph") and "camera.depth_image" in text
+
+
+def test_non_editable_install_finds_models_and_scenarios(tmp_path):
+    """A wheel install must carry models/ and diagrams/ and resolve package://nextage."""
+    import tangle_drake
+
+    source = tangle_drake.__file__.rsplit("/tangle_drake/", 1)[0]
+    target = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
+                    "--no-build-isolation", "--target", str(target), source],
+                   check=True, capture_output=True)
+    probe = (
+        "import tangle_drake, tangle_drake.paths as p;"
+        "from pydrake.multibody.plant import MultibodyPlant;"
+        "from tangle_drake.robot import add_nextage_with_gripper;"
+        "plant = MultibodyPlant(0.002); add_nextage_with_gripper(plant); plant.Finalize();"
+        "print(tangle_drake.__file__, p.models_dir(), p.diagrams_dir(), plant.num_positions())"
+    )
+    result = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True,
+                            text=True, env={"PYTHONPATH": str(target), "PATH": "/usr/bin:/bin"})
+    assert result.returncode == 0, result.stderr
+    module, models, diagrams, num_positions = result.stdout.split()
+    assert module.startswith(str(target)) and models.startswith(str(target))
+    assert diagrams.startswith(str(target)) and int(num_positions) == 17
