@@ -1,0 +1,118 @@
+"""Checking and reading the index's inputs: metric depth images and height-map images.
+
+Bad input is the user's to fix, so every problem here is a :class:`TangleDrakeError` that says
+what was wrong; nothing downstream has to guard against odd arrays again.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.errors import TangleDrakeError
+
+DEPTH_SUFFIXES = (".npy", ".tif", ".tiff")
+HEIGHT_MAP_SUFFIXES = (".png",)
+
+
+def _as_image_array(image: object, what: str) -> np.ndarray:
+    """``image`` as a non-empty numeric (not bool) numpy array, or a clear error."""
+    array = np.asarray(image)
+    if array.dtype == bool or array.dtype.kind not in "iuf":
+        raise TangleDrakeError(f"{what} must be a numeric image, got dtype {array.dtype}")
+    if array.size == 0:
+        raise TangleDrakeError(f"{what} is empty (shape {array.shape})")
+    return array
+
+
+def check_depth(depth: object, intrinsics: CameraIntrinsics) -> np.ndarray:
+    """Metric depth as float32 with +inf where the sensor saw nothing (NaN, inf or <= 0).
+
+    +inf is never the highest point, so missing pixels drop out of every later minimum.
+    """
+    array = _as_image_array(depth, "depth image")
+    if array.ndim != 2:
+        raise TangleDrakeError(f"depth image must be 2-D (rows, columns), got shape {array.shape}")
+    if array.dtype.kind != "f":
+        raise TangleDrakeError(f"depth image must hold floating-point metres, got {array.dtype} "
+                               "(convert integer millimetres to metres first)")
+    if array.shape != (intrinsics.height, intrinsics.width):
+        raise TangleDrakeError(f"depth image is {array.shape[1]}x{array.shape[0]} but the camera "
+                               f"intrinsics are {intrinsics.width}x{intrinsics.height}")
+    out = array.astype(np.float32)  # a copy: the caller's image is left alone
+    with np.errstate(invalid="ignore"):
+        out[~(out > 0)] = np.inf  # NaN and <= 0; +inf stays
+    if np.isinf(out).all():
+        raise TangleDrakeError("depth image has no valid pixel (all NaN, inf or 0)")
+    return out
+
+
+def height_map_to_depth(height_map: object, height_per_level_m: float) -> np.ndarray:
+    """A height map (8/16-bit grey or colour, brighter = higher) as metric depth, float32.
+
+    The depth is measured down from the height of the brightest possible grey level (255 or
+    65535), as if an orthographic camera looked down from there; colour images use the mean of
+    their colour channels.
+    """
+    array = _as_image_array(height_map, "height map")
+    if array.dtype not in (np.uint8, np.uint16):
+        raise TangleDrakeError(f"height map must be 8- or 16-bit unsigned, got {array.dtype}")
+    if array.ndim == 3 and array.shape[2] in (3, 4):
+        levels = array[..., :3].astype(np.float64).mean(axis=2)
+    elif array.ndim == 2:
+        levels = array.astype(np.float64)
+    else:
+        raise TangleDrakeError(f"height map must be grey (rows, columns) or colour "
+                               f"(rows, columns, 3|4), got shape {array.shape}")
+    check_scale(height_per_level_m, "height per grey level")
+    top = np.iinfo(array.dtype).max
+    return ((top - levels) * height_per_level_m).astype(np.float32)
+
+
+def check_scale(value: float, what: str) -> float:
+    """A positive, finite scale in metres, or a clear error."""
+    if (isinstance(value, bool) or not isinstance(value, (int, float, np.floating))
+            or not (np.isfinite(value) and value > 0)):
+        raise TangleDrakeError(f"{what} must be a positive number of metres, got {value!r}")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class ImageFile:
+    """An image read from disk: metric depth (``is_depth``) or a raw height map."""
+
+    path: Path
+    array: np.ndarray
+    is_depth: bool
+
+
+def read_image_file(path: str | Path) -> ImageFile:
+    """Read a metric depth (``.npy``, float ``.tif``) or a height map (8/16-bit ``.png``)."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in DEPTH_SUFFIXES + HEIGHT_MAP_SUFFIXES:
+        raise TangleDrakeError(f"{path}: unsupported image type {suffix!r}; use .npy or float "
+                               ".tif/.tiff for metric depth, .png for a height map")
+    if not path.is_file():
+        raise TangleDrakeError(f"{path}: no such file")
+    if suffix == ".npy":
+        try:
+            array = np.load(path, allow_pickle=False)
+        except (ValueError, OSError, EOFError) as error:
+            raise TangleDrakeError(f"{path}: not a readable .npy array ({error})") from error
+    else:
+        array = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        if array is None:
+            raise TangleDrakeError(f"{path}: cannot decode the image (corrupt or not a "
+                                   f"{suffix[1:].upper()})")
+    if suffix in (".tif", ".tiff") and array.dtype.kind != "f":
+        raise TangleDrakeError(f"{path}: a .tif depth image must hold float metres, got "
+                               f"{array.dtype}")
+    if suffix == ".png" and array.dtype not in (np.uint8, np.uint16):
+        raise TangleDrakeError(f"{path}: a height-map PNG must be 8- or 16-bit, got "
+                               f"{array.dtype}")
+    return ImageFile(path, array, is_depth=suffix in DEPTH_SUFFIXES)

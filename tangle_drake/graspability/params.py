@@ -1,0 +1,51 @@
+"""Tuning of the graspability index: everything that is not the hand or the camera."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class GraspabilityParams:
+    """Settings of :func:`~tangle_drake.graspability.compute_candidates` (SI units).
+
+    Defaults suit 6-10 mm wire parts seen from ~0.5 m with the default gripper.
+    """
+
+    n_orientations: int = 16
+    """Hand orientations, evenly spaced over 180 degrees starting at 0 (closing along +u)."""
+    top_k: int = 5
+    """How many candidates to return at most."""
+    cell_size_m: float = 0.0025
+    """Cell of the metric work map (about a third of the default finger's 8 mm thickness);
+    made coarser if the image's own pixels are coarser. The cost goes as 1 / cell^2."""
+    level_step_m: float = 0.001
+    """Spacing of the depth levels scanned from the top of the pile down."""
+    insertion_depth_m: float = 0.004
+    """How far the fingertips go below the top of what they grasp (rounded to whole levels)."""
+    blur_sigma_m: float = 0.0075
+    """Gaussian blur of the graspable maps: a candidate's score is the Gaussian-weighted share
+    of its neighbourhood where the same grasp also works, i.e. its tolerance to position error."""
+    min_distance_m: float = 0.02
+    """Minimum distance between two returned candidates' centres."""
+    peak_tolerance: float = 0.02
+    """Scores within this fraction of a peak's count as the peak's plateau; the candidate is put
+    at the plateau's middle (a long bar is grasped at its centre, not wherever rounding wins)."""
+    roi_margin_px: int = 0
+    """Candidates keep at least this many pixels inside the region of interest's edge."""
+
+    def __post_init__(self) -> None:
+        if self.n_orientations < 1 or self.top_k < 1:
+            raise ValueError("GraspabilityParams: n_orientations and top_k must be at least 1")
+        for name in ("cell_size_m", "level_step_m", "insertion_depth_m", "blur_sigma_m"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"GraspabilityParams.{name} must be positive")
+        if self.min_distance_m < 0 or self.roi_margin_px < 0:
+            raise ValueError("GraspabilityParams: min_distance_m, roi_margin_px must be >= 0")
+        if not 0 <= self.peak_tolerance < 1:
+            raise ValueError("GraspabilityParams.peak_tolerance must lie in [0, 1)")
+
+    @property
+    def insertion_levels(self) -> int:
+        """The insertion depth in whole levels (at least one)."""
+        return max(1, round(self.insertion_depth_m / self.level_step_m))

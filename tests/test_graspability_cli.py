@@ -1,0 +1,126 @@
+"""``tangle-drake graspability`` end to end, through the real command line."""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from tangle_drake.camera import CameraIntrinsics, CameraModel, save_camera_json, top_view_pose
+from tangle_drake.cli import main
+from tangle_drake.graspability.synthetic import pile_field
+
+FLOOR = 0.5
+K = CameraIntrinsics.from_fov_y(320, 240, 45.0)
+FIELDS = {"u", "v", "angle_deg", "width_m", "depth_m", "score"}
+
+
+@pytest.fixture(scope="module")
+def pile():
+    field = pile_field(np.random.default_rng(5), K, n_parts=12, floor_depth_m=FLOOR)
+    return field, field.render(K, FLOOR)
+
+
+def run(capsys, *argv):
+    code = main(["graspability", *map(str, argv)])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def test_metric_depth_with_camera_json_next_to_it(tmp_path, pile, capsys):
+    _, depth = pile
+    np.save(tmp_path / "pile.npy", depth)
+    cv2.imwrite(str(tmp_path / "pile.tiff"), depth)
+    save_camera_json(tmp_path / "camera.json", CameraModel(K, top_view_pose(np.zeros(3), FLOOR)))
+    out_json, overlays = tmp_path / "out" / "grasps.json", tmp_path / "overlays"
+    code, out, err = run(capsys, tmp_path / "pile.npy", tmp_path / "pile.tiff", "--top-k", 3,
+                         "--json", out_json, "--overlay", overlays)
+    assert code == 0, err
+    assert "pile.npy: 3 candidate(s)" in out
+    results = json.loads(out_json.read_text())
+    assert [r["image"] for r in results] == [str(tmp_path / "pile.npy"),
+                                             str(tmp_path / "pile.tiff")]
+    for result in results:
+        assert result["compute_ms"] > 0
+        assert len(result["candidates"]) == 3
+        for c in result["candidates"]:
+            assert set(c) == FIELDS | {"pose"}
+            pose = np.array(c["pose"])
+            assert pose.shape == (4, 4) and pose[3] == pytest.approx([0, 0, 0, 1])
+            assert pose[:3, 2] == pytest.approx([0, 0, -1])  # approach = camera +z = down
+            assert 0 <= c["angle_deg"] < 180 and 0 < c["score"] <= 1
+            assert c["width_m"] == 0.045 and 0.4 < c["depth_m"] < FLOOR
+    assert results[0]["candidates"] == results[1]["candidates"]
+    pictures = sorted(p.name for p in overlays.iterdir())
+    assert pictures == ["pile_grasps.png", "pile_grasps_2.png"]
+    assert cv2.imread(str(overlays / "pile_grasps.png")).shape == (240, 320, 3)
+
+
+def test_height_map_png(tmp_path, pile, capsys):
+    field, _ = pile
+    heights = cv2.resize(field.heights, None, fx=0.5, fy=0.5, interpolation=cv2.INTER_AREA)
+    png = tmp_path / "heights.png"
+    cv2.imwrite(str(png), np.rint(heights / 1e-4).astype(np.uint16))  # 0.1 mm, 1 mm pixels
+    out_json = tmp_path / "out.json"
+    code, out, err = run(capsys, png, "--height-per-level", 1e-4, "--pixel-size", 1e-3,
+                         "--json", out_json, "--overlay", tmp_path)
+    assert code == 0, err
+    assert "heights.png: 5 candidate(s)" in out and "m high" in out
+    (result,) = json.loads(out_json.read_text())
+    assert len(result["candidates"]) == 5
+    for c in result["candidates"]:
+        assert set(c) == FIELDS | {"height_m"}  # no camera pose: no pose
+        assert 0 < c["height_m"] < 0.08
+    assert (tmp_path / "heights_grasps.png").is_file()
+    code, _, err = run(capsys, png)
+    assert code == 1 and "--height-per-level and --pixel-size" in err
+
+
+def test_bad_files_are_reported_and_the_rest_still_run(tmp_path, pile, capsys):
+    _, depth = pile
+    good = tmp_path / "good.npy"
+    np.save(good, depth)
+    save_camera_json(tmp_path / "camera.json", CameraModel(K))
+    corrupt = tmp_path / "corrupt.png"
+    corrupt.write_bytes(b"\x89PNG\r\n\x1a\n" + b"\x00" * 40)
+    eight_bit_tiff = tmp_path / "eight.tif"
+    cv2.imwrite(str(eight_bit_tiff), np.zeros((240, 320), np.uint8))
+    bool_npy = tmp_path / "mask.npy"
+    np.save(bool_npy, depth > 0.45)
+    broken_npy = tmp_path / "broken.npy"
+    broken_npy.write_bytes(b"not numpy")
+    wrong_size = tmp_path / "small.npy"
+    np.save(wrong_size, depth[:100])
+    out_json = tmp_path / "out.json"
+    images = [corrupt, tmp_path / "missing.npy", good, eight_bit_tiff, bool_npy, broken_npy,
+              wrong_size, tmp_path / "notes.txt"]
+    code, out, err = run(capsys, *images, "--height-per-level", 1e-4, "--pixel-size", 1e-3,
+                         "--json", out_json)
+    assert code == 1
+    assert "7 of 8 images failed" in err
+    results = json.loads(out_json.read_text())
+    assert [r["image"] for r in results] == [str(p) for p in images]
+    errors = [r.get("error", "") for r in results]
+    assert "cannot decode" in errors[0]
+    assert "no such file" in errors[1]
+    assert errors[2] == "" and len(results[2]["candidates"]) == 5
+    assert "float metres" in errors[3]
+    assert "numeric" in errors[4]
+    assert "not a readable .npy" in errors[5]
+    assert "intrinsics" in errors[6]
+    assert "unsupported image type" in errors[7]
+    assert "good.npy: 5 candidate(s)" in out
+
+
+def test_metric_depth_without_a_camera(tmp_path, pile, capsys):
+    _, depth = pile
+    np.save(tmp_path / "pile.npy", depth)
+    code, _, err = run(capsys, tmp_path / "pile.npy")
+    assert code == 1 and "needs the camera intrinsics" in err
+    (tmp_path / "broken.json").write_text("{")
+    code, _, err = run(capsys, tmp_path / "pile.npy", "--camera", tmp_path / "broken.json")
+    assert code == 1 and "not a valid camera" in err
+    code, _, err = run(capsys, tmp_path / "pile.npy", "--top-k", 0)
+    assert code == 2 and "--top-k" in err
