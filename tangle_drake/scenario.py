@@ -15,11 +15,13 @@ from pathlib import Path
 
 import yaml
 from pydrake.common.yaml import yaml_load_typed
+from pydrake.lcm import DrakeLcmParams
 from pydrake.multibody.parsing import ModelDirective
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.sensors import CameraConfig
 
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.hardware.config import HardwareConfig, default_lcm_buses
 
 
 def _default_plant_config() -> MultibodyPlantConfig:
@@ -100,7 +102,7 @@ class PileConfig:
 
 @dataclass
 class Scenario:
-    """One station: plant settings, robot directives, bin, pile, top camera, visualisation."""
+    """One station: plant settings, robot directives, bin, pile, top camera, view cameras."""
 
     plant_config: MultibodyPlantConfig = field(default_factory=_default_plant_config)
     directives: list[ModelDirective] = field(default_factory=list)
@@ -118,7 +120,11 @@ class Scenario:
     view_cameras: list[CameraConfig] = field(default_factory=list)
     """Extra colour cameras for people to look through (e.g. an overview of the robot); each
     gives a port ``{name}.rgb_image`` and ``tangle-drake scene`` writes ``{name}.png``."""
-    meshcat: bool = False
+    lcm_buses: dict[str, DrakeLcmParams] = field(default_factory=default_lcm_buses)
+    """LCM buses by name, as in Drake's ``hardware_sim``; the default bus is in-process only
+    (``memq://``). A real robot's network URL goes here (``docs/hardware.md``)."""
+    hardware: HardwareConfig = field(default_factory=HardwareConfig)
+    """Channels, rates and timeouts of the robot's drivers (``build_station(hardware=True)``)."""
 
     def validate(self) -> None:
         time_step = self.plant_config.time_step
@@ -141,6 +147,7 @@ class Scenario:
         names = [c.name for c in self.view_cameras]
         _require(len(set(names)) == len(names) and self.camera.name not in names,
                  "view_cameras", "need names unique among all cameras")
+        self.hardware.validate("hardware", list(self.lcm_buses))
 
 
 class _Tagged(typing.NamedTuple):
