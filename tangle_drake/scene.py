@@ -76,7 +76,8 @@ def render_depth(station: Diagram, context: Context) -> np.ndarray:
 
 
 def render_rgb(station: Diagram, context: Context, camera: str = "camera") -> np.ndarray:
-    """A camera's colour image, uint8 (H, W, 3) RGB (the top camera unless named)."""
+    """A camera's colour image, uint8 (H, W, 3) RGB (the top camera unless another port
+    prefix is named, e.g. ``sim.overview`` for a view camera)."""
     image = station.GetOutputPort(f"{camera}.rgb_image").Eval(context)
     return np.array(image.data, copy=True)[:, :, :3]
 
@@ -101,6 +102,6 @@ def make_scene(scenario: Scenario, seed: int | None = None,
     rgb = render_rgb(station, simulator.get_context())
     camera = camera_model(scenario)
     floor_depth = float(camera.X_WC[2, 3] - scenario.bin.floor_height)
-    views = {config.name: render_rgb(station, simulator.get_context(), config.name)
+    views = {config.name: render_rgb(station, simulator.get_context(), f"sim.{config.name}")
              for config in scenario.view_cameras}
     return Scene(station, simulator, report, camera, depth, rgb, floor_depth, timings, views)

@@ -10,14 +10,14 @@ port                        dir    meaning
 ``nextage.position_measured`` out  measured joint positions
 ``nextage.state_measured``  out    measured [positions, velocities]
 ``gripper.position``        in     commanded opening width between the finger pads, m
-``gripper.force_limit``     in     (optional) grip force limit, N; unconnected = the spec's
 ``gripper.state_measured``  out    measured [width, width rate]
 ``camera.rgb_image``        out    top camera colour image
 ``camera.depth_image``      out    top camera depth, metres along the optical axis (32F)
 =========================== ====== =====================================================
 
 Simulation-only ports, which no real robot has, start with ``sim.``: ``sim.plant_state``,
-``sim.body_poses``, ``sim.query_object``, ``sim.contact_results``, ``sim.camera.label_image``.
+``sim.body_poses``, ``sim.query_object``, ``sim.contact_results``, ``sim.camera.label_image``,
+and ``sim.{name}.rgb_image`` for each of the scenario's view cameras.
 Controllers must not read them; benchmarks and tests may.
 """
 
@@ -36,6 +36,7 @@ from pydrake.multibody.parsing import ModelDirectives, ProcessModelDirectives
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
 from pydrake.systems.framework import Context, Diagram, DiagramBuilder
+from pydrake.systems.lcm import LcmBuses
 from pydrake.systems.primitives import MatrixGain, StateInterpolatorWithDiscreteDerivative
 from pydrake.systems.sensors import CameraConfig, RgbdSensor
 
@@ -102,8 +103,18 @@ def pile_instances(plant: MultibodyPlant) -> list[ModelInstanceIndex]:
     return [i for i in instances if plant.GetModelInstanceName(i).startswith(PILE_SCOPE + "_")]
 
 
-def build_station(scenario: Scenario, meshcat: Meshcat | None = None) -> Diagram:
-    """The simulated station diagram for ``scenario`` (see the module docstring for its ports)."""
+def build_station(scenario: Scenario, meshcat: Meshcat | None = None, hardware: bool = False,
+                  lcm_buses: LcmBuses | None = None) -> Diagram:
+    """The simulated station diagram for ``scenario`` (see the module docstring for its ports).
+
+    ``hardware=True`` gives the hardware station instead: the same ports over the robot's LCM
+    drivers (``tangle_drake.hardware.station``; ``lcm_buses`` overrides the scenario's buses,
+    and ``meshcat`` is not used).
+    """
+    if hardware:
+        from tangle_drake.hardware.station import build_hardware_station
+
+        return build_hardware_station(scenario, lcm_buses)
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
     plant.set_name(PLANT_NAME)
@@ -199,7 +210,8 @@ def _add_view_camera(builder: DiagramBuilder, scene_graph, config: CameraConfig)
     if config.X_PB.base_frame not in (None, "", "world"):
         raise TangleDrakeError(f"view camera {config.name!r}: X_PB must be in the world frame")
     sensor = _add_sensor(builder, scene_graph, config, config.X_PB.GetDeterministicValue())
-    builder.ExportOutput(sensor.color_image_output_port(), f"{config.name}.rgb_image")
+    builder.ExportOutput(sensor.color_image_output_port(),
+                         f"{SIM_ONLY_PREFIX}{config.name}.rgb_image")
 
 
 def _add_camera(builder: DiagramBuilder, scene_graph, scenario: Scenario) -> None:

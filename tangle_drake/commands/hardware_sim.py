@@ -1,0 +1,98 @@
+"""``tangle-drake hardware-sim``: the simulated robot, gripper, camera and pile behind LCM."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+import time
+
+from tangle_drake.commands.scene import add_scenario_argument
+from tangle_drake.errors import TangleDrakeError
+
+CHECK_TIMEOUT = 10.0
+"""Simulated seconds ``--check`` allows its scripted motion."""
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "hardware-sim", help="simulate the robot behind its LCM driver messages",
+        description="Simulate the Nextage, its gripper, the top camera and a settled pile, and "
+                    "speak only the robot's driver messages (lcmt_iiwa_command/status, "
+                    "lcmt_schunk_wsg_command/status, lcmt_image_array) on the scenario's LCM "
+                    "bus, like Drake's hardware_sim. The bus must be a network URL set in the "
+                    "scenario's lcm_buses (the default memq:// reaches no other process); "
+                    "--check instead drives it in this process with a scripted controller "
+                    "through the hardware station, over memq:// only.")
+    add_scenario_argument(parser)
+    parser.add_argument("--seed", type=int, default=None,
+                        help="pile seed (default: the scenario's pile.seed)")
+    parser.add_argument("--duration", type=float, default=math.inf,
+                        help="simulated seconds to run (default: until interrupted)")
+    parser.add_argument("--check", action="store_true",
+                        help="run a scripted arm move and gripper close/open through the "
+                             "hardware station in this process, and report how it went")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from tangle_drake.scenario_files import resolve_scenario
+
+    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    scenario = resolve_scenario(args.scenario)
+    return _check(scenario, args.seed) if args.check else _serve(scenario, args)
+
+
+def _serve(scenario, args: argparse.Namespace) -> int:
+    from tangle_drake.hardware.config import IN_PROCESS_URL
+    from tangle_drake.hardware.hardware_sim import build_hardware_sim
+
+    bus = scenario.hardware.lcm_bus
+    url = scenario.lcm_buses[bus].lcm_url
+    if url.startswith(IN_PROCESS_URL):
+        raise TangleDrakeError(
+            f"the scenario's LCM bus {bus!r} is {url!r}, which no other process can reach; "
+            f"set lcm_buses.{bus}.lcm_url to the robot network's URL (see docs/hardware.md), "
+            "or use --check to drive the simulator from this process")
+    sim = build_hardware_sim(scenario, seed=args.seed, progress=print)
+    print(f"hardware simulator on {url or 'the default LCM URL'}: pile of "
+          f"{sim.pile.num_in_bin} parts; commands on {scenario.hardware.nextage_command_channel}"
+          f" and {scenario.hardware.wsg_command_channel}")
+    sim.simulator.set_target_realtime_rate(1.0)
+    start = time.perf_counter()
+    while sim.simulator.get_context().get_time() < args.duration:
+        now = sim.simulator.get_context().get_time()
+        sim.simulator.AdvanceTo(min(now + 1.0, args.duration))
+        print(f"t = {sim.simulator.get_context().get_time():.1f} s "
+              f"(wall {time.perf_counter() - start:.1f} s)")
+    return 0
+
+
+def _check(scenario, seed: int | None) -> int:
+    import numpy as np
+
+    from tangle_drake.hardware.loop import HardwareInTheLoop
+    from tangle_drake.hardware.scripted import default_target, scripted_controller
+
+    start = time.perf_counter()
+    loop = HardwareInTheLoop(scenario, scripted_controller, seed=seed, progress=print)
+    done_port = loop.controller_diagram.GetOutputPort("script.done")
+    station_context = loop.station.GetMyContextFromRoot(loop.controller.get_context())
+    widths = []
+
+    def done(_: HardwareInTheLoop) -> bool:
+        widths.append(loop.station.GetOutputPort("gripper.state_measured")
+                      .Eval(station_context)[0])
+        return done_port.Eval(loop.controller.get_context())[0] > 0.5
+
+    finished = loop.advance_until(done, CHECK_TIMEOUT)
+    report = loop.station.GetOutputPort("safety.report").Eval(station_context)
+    q = loop.station.GetOutputPort("nextage.position_measured").Eval(station_context)
+    error = float(np.max(np.abs(q - default_target())))
+    print(f"scripted motion {'finished' if finished else 'did not finish'} at t = "
+          f"{loop.time:.2f} s ({time.perf_counter() - start:.1f} s wall): arm within "
+          f"{error:.4f} rad of its target, gripper closed to {1e3 * min(widths):.1f} mm and "
+          f"opened to {1e3 * widths[-1]:.1f} mm; safety {report.mode.value}"
+          f"{': ' + report.message if report.message else ''}; malformed status messages "
+          f"{sum(report.rejected)}")
+    return 0 if finished and report.message == "" else 1

@@ -1,0 +1,222 @@
+"""The hardware simulator and a controller over one in-process memq:// bus: a scripted arm
+move with gripper close/open, and a whole pick by the unchanged pick diagram, complete; a status
+outage stops the robot safely and a reset restarts it from where it stands; malformed commands
+are refused by the robot side."""
+
+import argparse
+
+import numpy as np
+import pytest
+
+from tangle_drake.commands import hardware_sim as command
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.hardware.limits import robot_limits
+from tangle_drake.hardware.loop import HardwareInTheLoop, run_with_hardware_sim
+from tangle_drake.hardware.safety import Mode
+from tangle_drake.hardware.scripted import default_target, scripted_controller
+from tangle_drake.paths import diagrams_dir
+from tangle_drake.scenario import load_scenario
+
+SMALL = """
+directives:
+- add_directives:
+    file: package://nextage/nextage_with_gripper.dmd.yaml
+pile: {parts: [{part: u_hook, count: 3}]}
+camera:
+  name: camera
+  width: 160
+  height: 120
+  focal: !FovDegrees {y: 45}
+  renderer_class: RenderEngineVtk
+"""
+
+
+def _scenario(depth_format: str = "32F"):
+    scenario = load_scenario(diagrams_dir() / "pick_demo.yaml")
+    scenario.view_cameras = []
+    scenario.pile.parts[0].count = 3
+    scenario.camera.width, scenario.camera.height = 160, 120
+    scenario.hardware.depth_format = depth_format
+    return scenario
+
+
+class Probe:
+    """Reads both sides of a loop each period: what the robot was told and what it reports."""
+
+    def __init__(self, loop: HardwareInTheLoop) -> None:
+        self.loop = loop
+        self.receiver = loop.robot.diagram.GetSubsystemByName("nextage.command_receiver")
+        self.rows: list[dict] = []
+
+    def station(self, name: str):
+        context = self.loop.station.GetMyContextFromRoot(self.loop.controller.get_context())
+        return self.loop.station.GetOutputPort(name).Eval(context)
+
+    def record(self, _: HardwareInTheLoop) -> bool:
+        robot_context = self.receiver.GetMyContextFromRoot(self.loop.robot.simulator.get_context())
+        self.rows.append({
+            "t": self.loop.time,
+            "told": self.receiver.get_commanded_position_output_port().Eval(robot_context).copy(),
+            "q": self.station("nextage.position_measured").copy(),
+            "width": self.station("gripper.state_measured")[0],
+            "mode": self.station("safety.report").mode})
+        done = self.loop.controller_diagram.GetOutputPort("script.done")
+        return done.Eval(self.loop.controller.get_context())[0] > 0.5
+
+    def column(self, name: str) -> np.ndarray:
+        return np.array([row[name] for row in self.rows])
+
+
+def _within_speed_limits(told: np.ndarray, period: float) -> bool:
+    """Whether the robot was never told to move a joint faster than its limit."""
+    speed = np.abs(np.diff(told, axis=0)) / period
+    return bool(np.all(speed <= robot_limits(_scenario()).velocity))
+
+
+def test_scripted_move_and_gripper_close_open_complete_with_the_state_following():
+    loop = HardwareInTheLoop(_scenario(), scripted_controller)
+    probe = Probe(loop)
+    bad_commands = 0
+
+    def step(loop_: HardwareInTheLoop) -> bool:
+        nonlocal bad_commands
+        if len(probe.rows) % 40 == 20:  # now and then a corrupt command reaches the robot
+            loop_.lcm.Publish("NEXTAGE_COMMAND", b"\x01corrupt")
+            loop_.lcm.Publish("WSG_COMMAND", b"\x01corrupt")
+            bad_commands += 1
+        return probe.record(loop_)
+
+    assert loop.advance_until(step, timeout=6.0)
+    loop.advance(0.3)  # let the fingers finish opening
+    probe.record(loop)
+
+    report = probe.station("safety.report")
+    assert report.mode is Mode.RUNNING and report.message == "" and report.rejected == (0, 0)
+    q, told = probe.column("q"), probe.column("told")
+    np.testing.assert_allclose(q[-1], default_target(), atol=2e-3)
+    assert np.max(np.abs(q - told)) < 0.05  # the measured pose follows the command
+    # A corrupt command replaces a good one, so the next step covers two periods' motion.
+    assert _within_speed_limits(told, loop.period)
+    widths = probe.column("width")
+    assert widths.min() < 1e-3 and widths[-1] > 0.040
+    assert widths[0] == pytest.approx(0.045, abs=1e-3)
+    status = loop.station.GetSubsystemByName("nextage.status.subscriber")
+    received = status.get_output_port().Eval(status.GetMyContextFromRoot(
+        loop.controller.get_context()))
+    assert received.valid == pytest.approx(loop.time / loop.period, abs=3)  # 200 Hz
+    for name in ("nextage.command.subscriber", "gripper.command.subscriber"):
+        robot_side = loop.robot.diagram.GetSubsystemByName(name)
+        record = robot_side.get_output_port().Eval(robot_side.GetMyContextFromRoot(
+            loop.robot.simulator.get_context()))
+        assert record.rejected == bad_commands > 0
+
+
+def test_status_outage_stops_safely_and_a_reset_restarts_from_the_measured_pose():
+    loop = HardwareInTheLoop(_scenario(), scripted_controller)
+    probe = Probe(loop)
+    for _ in range(60):  # 0.3 s: the arm is moving now
+        loop.advance(loop.period)
+        probe.record(loop)
+    paused_at = loop.time
+    while probe.rows[-1]["mode"] is not Mode.FAULT:
+        loop.advance(loop.period, robot=False)  # the robot's status stops
+        probe.record(loop)
+        assert loop.time - paused_at < 0.2
+    assert loop.time - paused_at == pytest.approx(0.11, abs=0.011)
+    report = probe.station("safety.report")
+    assert "no valid NEXTAGE_STATUS" in report.message
+    assert probe.station("safety.fault")[0] == 1
+    held = probe.station("nextage.position_measured").copy()  # the last status
+
+    for _ in range(60):  # the robot is back; it is told to hold the measured pose
+        loop.advance(loop.period)
+        probe.record(loop)
+    np.testing.assert_allclose(probe.rows[-1]["told"], held, atol=1e-12)
+    assert probe.rows[-1]["mode"] is Mode.FAULT
+
+    station_context = loop.station.GetMyContextFromRoot(loop.controller.get_context())
+    loop.station.GetInputPort("safety.reset").FixValue(station_context, [1.0])
+    rearm = len(probe.rows)
+    assert loop.advance_until(probe.record, timeout=6.0)
+    restarted = next(i for i in range(rearm, len(probe.rows))
+                     if probe.rows[i]["mode"] is Mode.RUNNING)
+    told = probe.column("told")[restarted:]
+    # The first command after the restart is the measured pose: no jump, then a smooth move.
+    np.testing.assert_allclose(told[1], probe.rows[restarted]["q"], atol=2e-3)
+    assert _within_speed_limits(told, loop.period)
+    assert np.max(np.abs(np.diff(told, axis=0))) / loop.period < 1.0  # the script's own pace
+    np.testing.assert_allclose(probe.rows[-1]["q"], default_target(), atol=5e-3)
+
+
+@pytest.mark.parametrize("depth_format", ["32F", "16U"])
+def test_camera_images_over_lcm_match_the_simulated_camera(depth_format):
+    # No controller around the station: nothing commands the robot, which holds still.
+    loop = run_with_hardware_sim(_scenario(depth_format), lambda station: station, 0.25)
+    context = loop.station.GetMyContextFromRoot(loop.controller.get_context())
+    depth = np.array(loop.station.GetOutputPort("camera.depth_image").Eval(context).data)
+    rgb = np.array(loop.station.GetOutputPort("camera.rgb_image").Eval(context).data)
+    truth_context = loop.robot.station.GetMyContextFromRoot(loop.robot.simulator.get_context())
+    true_depth = np.array(loop.robot.station.GetOutputPort("camera.depth_image")
+                          .Eval(truth_context).data)
+    true_rgb = np.array(loop.robot.station.GetOutputPort("camera.rgb_image")
+                        .Eval(truth_context).data)
+    assert depth.shape == true_depth.shape == (120, 160, 1)
+    # The image is up to one camera period old and the pile still creeps by a hair.
+    assert np.abs(rgb.astype(int) - true_rgb).max() <= 2
+    seen = np.isfinite(true_depth) & (true_depth > 0)
+    assert seen.mean() > 0.3  # the bin and the pile; the ground has no visual geometry
+    np.testing.assert_array_equal(np.isfinite(depth), np.isfinite(true_depth))
+    tolerance = 1e-3 if depth_format == "16U" else 0.0  # Drake truncates to whole mm
+    assert np.mean(np.abs(depth[seen] - true_depth[seen]) <= tolerance + 1e-4) > 0.995
+    assert loop.station.GetOutputPort("safety.report").Eval(context).mode is Mode.RUNNING
+
+
+def test_the_pick_diagram_picks_one_part_through_the_hardware_interface():
+    """The unchanged pick diagram, its station built with hardware=True, against the hardware
+    simulator: one whole pick (look, plan, approach, grasp, lift, check, place)."""
+    from tangle_drake.pick.demo import empty_width
+    from tangle_drake.pick.diagram import build_pick_diagram
+    from tangle_drake.pick.outcome import Outcome
+    from tangle_drake.pick.planner import Mode as PickMode
+    from tangle_drake.pick.planner import PickSettings
+    from tangle_drake.pick.selection import resolve_tangle_choice
+    from tangle_drake.planning.arm_motion import ArmMotion
+
+    scenario = load_scenario(diagrams_dir() / "pick_demo.yaml")
+    scenario.view_cameras = []
+    scenario.pile.parts[0].count = 3
+    settings = PickSettings(max_picks=1, empty_width=empty_width(scenario.pile))
+    choice = resolve_tangle_choice("u_hook", "graspability")
+
+    def pick_diagram(station):
+        return build_pick_diagram(scenario, choice, ArmMotion(scenario.bin), station=station,
+                                  settings=settings).diagram
+
+    loop = HardwareInTheLoop(scenario, pick_diagram)
+    mode = loop.controller_diagram.GetOutputPort("mode")
+    context = loop.station.GetMyContextFromRoot(loop.get_context())
+    fault = loop.station.GetOutputPort("safety.fault")
+    while mode.Eval(loop.get_context()) is not PickMode.DONE:
+        assert loop.time < 30.0, f"no pick after {loop.time:.0f} s"
+        loop.AdvanceTo(loop.time + 0.5)
+        assert fault.Eval(context)[0] == 0, \
+            loop.station.GetOutputPort("safety.report").Eval(context).message
+    (record,) = loop.controller_diagram.GetOutputPort("picks").Eval(loop.get_context())
+    assert record.outcome is Outcome.HELD, record.describe()
+
+
+def _run_command(argv: list[str]) -> int:
+    parser = argparse.ArgumentParser()
+    command.register(parser.add_subparsers())
+    args = parser.parse_args(argv)
+    return args.func(args)
+
+
+def test_hardware_sim_command_checks_in_process_and_refuses_an_unreachable_bus(tmp_path, capsys):
+    scenario = tmp_path / "small.yaml"
+    scenario.write_text(SMALL)
+    assert _run_command(["hardware-sim", "--scenario", str(scenario), "--check"]) == 0
+    out = capsys.readouterr().out
+    assert "scripted motion finished" in out and "safety running" in out
+    with pytest.raises(TangleDrakeError, match="which no other process can reach"):
+        _run_command(["hardware-sim", "--scenario", str(scenario)])
