@@ -42,6 +42,17 @@ SAMPLE_FIELDS: dict[str, np.dtype] = {
 }
 OPTIONAL_FIELDS: dict[str, np.dtype] = {
     "full_depth": np.dtype(np.float32),     # (H, W) whole depth image, if asked for
+    # What the labelling simulator saw (tangle_drake.tangle_data.samples); -1 / NaN = no lift.
+    "num_riding": np.dtype(np.int16),       # of the lifted parts, how many ride on the target
+    "lifted_mask": np.dtype(np.int64),      # bit n = pile part n rose above the threshold
+    "hanging_mask": np.dtype(np.int64),     # bit n = pile part n hangs from the target
+    "riding_mask": np.dtype(np.int64),      # bit n = pile part n rides on the target
+    "max_rise_m": np.dtype(np.float32),     # largest rise of another part during the lift
+    "target_rise_m": np.dtype(np.float32),  # how far the target rose by the lift's end
+    "stalled": np.dtype(np.int8),           # 1 = the pile held the target down
+    "pose": np.dtype(np.float64),           # (4, 4) candidate's tool pose X_WT
+    "part": np.dtype("U64"),                # part type (built-in name or mesh file stem)
+    "repeat_tangled": np.dtype(np.int16),   # with --repeat K: how many of K lifts said tangled
 }
 
 

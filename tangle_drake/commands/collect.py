@@ -1,0 +1,133 @@
+"""``tangle-drake collect``: simulate picks on random piles and label them tangled or not.
+
+The paper's data simulator (section III-B): piles of one part type, graspability candidates,
+the part in the closing region lifted by a force, labelled *tangled* if anything else comes
+up. Resumable (run the same command again), parallel (``--workers``, ``--ray``).
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import replace
+from pathlib import Path
+
+DEFAULT_SAMPLES = 5100
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "collect", help="collect a labelled tangle dataset in simulation (resumable)",
+        description="Drop random piles of one part, rank grasp candidates with the "
+                    "graspability index, lift the part in each candidate's closing region "
+                    "with a force and label the pick tangled if another part comes up (or "
+                    "if two parts lie in the closing region). Stops once --out holds at "
+                    "least --samples samples; run it again (or with a larger --samples) to "
+                    "resume or continue.")
+    parser.add_argument("--part", required=True,
+                        help="built-in part (u_hook, s_hook, c_ring, j_hook, e_shape) or a "
+                             "mesh file (.obj, .stl, .ply)")
+    parser.add_argument("--mesh-scale", type=float, default=1.0, metavar="S",
+                        help="metres per mesh unit (0.001 for millimetres; default 1)")
+    parser.add_argument("--samples", type=int, default=DEFAULT_SAMPLES, metavar="N",
+                        help=f"stop once the dataset holds this many (default {DEFAULT_SAMPLES})")
+    parser.add_argument("--out", type=Path, required=True, help="dataset directory")
+    parser.add_argument("--seed", type=int, default=0, help="collection seed (default 0)")
+    parser.add_argument("--workers", type=int, default=None, metavar="N",
+                        help="local worker processes (default: one per CPU core); with "
+                             "--ray, the number of Ray actors (default: the cluster's CPUs)")
+    parser.add_argument("--ray", metavar="ADDRESS", default=None,
+                        help="run the tasks on an existing Ray cluster (e.g. auto, or "
+                             "ray://head:10001); needs pip install 'tangle_drake[ray]'")
+    parser.add_argument("--parts-per-pile", type=int, default=None, metavar="N",
+                        help="parts in each pile (default: per part, about three layers)")
+    parser.add_argument("--lifts-per-pile", type=int, default=None, metavar="K",
+                        help="candidates labelled per pile, drawn from the top-k (default 5)")
+    parser.add_argument("--top-k", type=int, default=None, metavar="K",
+                        help="graspability candidates per pile (default 5, as the paper)")
+    parser.add_argument("--lift-height", type=float, default=None, metavar="M",
+                        help="how far the target is lifted, m (default 0.12)")
+    parser.add_argument("--rise-threshold", type=float, default=None, metavar="M",
+                        help="another part rising more than this makes the pick tangled, "
+                             "m (default 0.03)")
+    parser.add_argument("--repeat", type=int, default=1, metavar="K",
+                        help="re-run each lift K times under small perturbations and report "
+                             "the label agreement (default 1: no re-runs)")
+    parser.add_argument("--full-depth", action="store_true",
+                        help="also store each sample's whole depth image (~1.2 MB each)")
+    parser.add_argument("--scenario", default=None,
+                        help="data scenario YAML (default: the shipped tangle_data.yaml)")
+    parser.set_defaults(func=run)
+
+
+def settings_from_args(args: argparse.Namespace):
+    """The collection settings the arguments ask for, defaults filled in."""
+    from tangle_drake.parts import load_part
+    from tangle_drake.tangle_data.defaults import default_parts_per_pile
+    from tangle_drake.tangle_data.settings import CollectSettings
+    from tangle_drake.tangle_data.simulator import data_scenario
+
+    settings = CollectSettings(part=args.part, mesh_scale=args.mesh_scale, seed=args.seed,
+                               repeat=args.repeat, full_depth=args.full_depth)
+    if args.top_k is not None:
+        settings = replace(settings, top_k=args.top_k)
+    if args.lifts_per_pile is not None:
+        settings = replace(settings, lifts_per_pile=args.lifts_per_pile)
+    if args.lift_height is not None:
+        settings = replace(settings, lift=replace(settings.lift, height_m=args.lift_height))
+    if args.rise_threshold is not None:
+        settings = replace(settings, labels=replace(settings.labels,
+                                                    rise_threshold_m=args.rise_threshold))
+    scenario_text = _scenario_text(args.scenario)
+    if args.parts_per_pile is not None:
+        settings = replace(settings, parts_per_pile=args.parts_per_pile)
+    else:
+        scenario = data_scenario(scenario_text, settings)
+        part = load_part(args.part, mesh_scale=args.mesh_scale)
+        settings = replace(settings, parts_per_pile=default_parts_per_pile(
+            args.part, part, scenario.bin))
+    return settings, scenario_text
+
+
+def _scenario_text(path: str | None) -> str:
+    from tangle_drake.errors import TangleDrakeError
+    from tangle_drake.tangle_data.collect import default_scenario_text
+
+    if path is None:
+        return default_scenario_text()
+    try:
+        return Path(path).read_text()
+    except OSError as error:
+        raise TangleDrakeError(f"cannot read scenario file {path}: {error.strerror}") from error
+
+
+def run(args: argparse.Namespace) -> int:
+    from tangle_drake.tangle_data.collect import collect
+
+    settings, scenario_text = settings_from_args(args)
+    print(f"collecting {args.samples} samples of {settings.part} into {args.out}: "
+          f"{settings.parts_per_pile} parts per pile, {settings.lifts_per_pile} of the top "
+          f"{settings.top_k} candidates lifted per pile, seed {settings.seed}")
+    result = collect(settings, args.out, args.samples, workers=args.workers,
+                     ray_address=args.ray, scenario_text=scenario_text)
+    counts = result.counts
+    print(f"{result.directory}: {counts['samples']} samples from {counts['tasks']} piles, "
+          f"{counts['tangled']} tangled ({_percent(counts['tangled'], counts['samples'])}), "
+          f"{counts['immediate']} labelled without a lift (two parts in the closing region), "
+          f"{counts['empty_region']} candidates skipped (empty closing region), "
+          f"{counts['lift_errors']} lifts failed")
+    if result.new_tasks:
+        print(f"this run: {result.new_tasks} piles, "
+              f"{result.per_minute_per_worker:.1f} samples/min/worker")
+    if "repeat_all_agree_fraction" in counts:
+        print(f"label agreement over {counts['repeat_lifts']} lifts x {settings.repeat}: all "
+              f"agree {100 * counts['repeat_all_agree_fraction']:.1f} %, majority agreement "
+              f"{100 * counts['repeat_majority_agreement']:.1f} %")
+    if result.interrupted:
+        print("interrupted: every finished pile is kept; run the same command again to "
+              "resume where it stopped")
+        return 130
+    return 0
+
+
+def _percent(part: int, whole: int) -> str:
+    return f"{100 * part / whole:.1f} %" if whole else "-"

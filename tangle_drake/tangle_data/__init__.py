@@ -1,0 +1,1 @@
+"""The tangle-data simulator (paper, section III-B): label picks as tangled or not, at scale."""

@@ -1,0 +1,134 @@
+"""Drive a collection: resume the dataset, farm tasks out, write each finished task.
+
+Task ``i`` is one pile made from (seed, i) (:mod:`.seeds`); tasks are handed out lowest
+unfinished index first, and no more are started once the samples on disk plus those the
+running tasks will likely add reach the target. So a run collects the first tasks that
+reach ``samples`` (with N workers, up to N-1 tasks more, which a longer run would make
+next anyway), and an interrupted run, run again, redoes exactly the tasks that were lost.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+from concurrent.futures import FIRST_COMPLETED, Future, wait
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from tangle_drake import __version__
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.parts import BUILTIN_PARTS, PartModel, load_part
+from tangle_drake.paths import diagrams_dir
+from tangle_drake.scenario import Scenario
+from tangle_drake.station import camera_model
+from tangle_drake.tangle_data.progress import CollectProgress
+from tangle_drake.tangle_data.settings import CollectSettings
+from tangle_drake.tangle_data.simulator import TaskResult, data_scenario
+from tangle_drake.tangle_data.store import DatasetStore
+from tangle_drake.tangle_data.workers import start_workers
+
+DATA_SCENARIO = "tangle_data.yaml"
+
+
+@dataclass(frozen=True)
+class CollectionResult:
+    directory: Path
+    counts: dict
+    new_tasks: int
+    interrupted: bool
+    per_minute_per_worker: float
+
+
+def default_scenario_text() -> str:
+    """The shipped data scenario (``diagrams/tangle_data.yaml``)."""
+    return (diagrams_dir() / DATA_SCENARIO).read_text()
+
+
+def collection_identity(settings: CollectSettings, scenario: Scenario,
+                        part: PartModel) -> dict:
+    """What the manifest binds a dataset to: settings, part (by content for a mesh file),
+    the station's bin, camera and physics, and the format version of the tool."""
+    identity = settings.identity()
+    if settings.part not in BUILTIN_PARTS:
+        identity["part"] = part.name
+        identity["part_sha256"] = hashlib.sha256(Path(settings.part).read_bytes()).hexdigest()
+    camera = camera_model(scenario)
+    identity["scenario"] = {
+        "bin": asdict(scenario.bin),
+        "camera": {**asdict(camera.intrinsics), "X_WC": camera.X_WC.round(9).tolist()},
+        "time_step": scenario.plant_config.time_step,
+        "contact": scenario.plant_config.discrete_contact_approximation,
+        "pile": {name: getattr(scenario.pile, name) for name in
+                 ("settle_speed", "settle_time_max", "max_penetration", "max_redraws")},
+    }
+    identity["part_mass_kg"] = round(part.mass, 9)
+    identity["made_by"] = f"tangle_drake {__version__}"
+    return identity
+
+
+def collect(settings: CollectSettings, out: Path, samples: int, workers: int | None = None,
+            ray_address: str | None = None, scenario_text: str | None = None,
+            show_progress: bool | None = None) -> CollectionResult:
+    """Collect until ``out`` holds at least ``samples`` samples (Ctrl-C keeps what is done)."""
+    if samples < 1:
+        raise TangleDrakeError(f"--samples must be at least 1, got {samples}")
+    if workers is not None and workers < 1:
+        raise TangleDrakeError(f"--workers must be at least 1, got {workers}")
+    scenario_text = default_scenario_text() if scenario_text is None else scenario_text
+    scenario = data_scenario(scenario_text, settings)
+    part = load_part(settings.part, mesh_scale=settings.mesh_scale)  # builds the cache once
+    store = DatasetStore(out, collection_identity(settings, scenario, part))
+    try:
+        return _run(store, settings, samples, workers, ray_address, scenario_text, part.name,
+                    show_progress)
+    finally:
+        store.close()
+
+
+def _run(store: DatasetStore, settings: CollectSettings, samples: int, workers: int | None,
+         ray_address: str | None, scenario_text: str, name: str,
+         show_progress: bool | None) -> CollectionResult:
+    if store.totals["samples"] >= samples:
+        return CollectionResult(store.directory, store.counts(), 0, False, 0.0)
+    backend = start_workers(scenario_text, settings, workers, ray_address)
+    progress = CollectProgress(name, samples, store.counts(), backend.capacity,
+                               show_progress)
+    pending: dict[Future, int] = {}
+    unfinished = (task for task in itertools.count() if task not in store.finished)
+    new_tasks = 0
+    interrupted = False
+    try:
+        while True:
+            while len(pending) < backend.capacity and \
+                    _expected(store, len(pending), settings) < samples:
+                task = next(unfinished)
+                pending[backend.submit(task)] = task
+            if not pending:
+                break
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in sorted(done, key=pending.__getitem__):
+                result = _result(future, pending.pop(future), settings.seed)
+                store.add(result)
+                progress.task_done(result.stats)
+                new_tasks += 1
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        backend.close()
+        progress.close()
+    return CollectionResult(store.directory, store.counts(), new_tasks, interrupted,
+                            progress.per_minute_per_worker())
+
+
+def _expected(store: DatasetStore, running: int, settings: CollectSettings) -> float:
+    """Samples on disk plus those ``running`` tasks will likely add."""
+    done = store.totals["tasks"]
+    per_task = store.totals["samples"] / done if done else settings.lifts_per_pile
+    return store.totals["samples"] + running * per_task
+
+
+def _result(future: Future, task: int, seed: int) -> TaskResult:
+    try:
+        return future.result()
+    except RuntimeError as error:  # Drake gave up (solver, geometry): say how to reproduce it
+        raise TangleDrakeError(f"task {task} (seed {seed}) failed: {error}") from error
