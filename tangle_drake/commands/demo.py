@@ -1,0 +1,54 @@
+"""``tangle-drake demo``: the Nextage picks parts from a simulated pile, one at a time."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from tangle_drake.commands.scene import add_scenario_argument
+from tangle_drake.tangle_cnn.selection import RULES
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "demo", help="pick parts from a simulated pile with the Nextage, one at a time",
+        description="Drop a pile in the simulated station, then run the whole pick diagram "
+                    "(top camera, graspability index, tangle CNN, pick planner, Nextage arm "
+                    "and gripper) until --picks picks are done, printing each pick's outcome "
+                    "(one part, several, none, or why it failed) and timings. Uses "
+                    "tangle_drake/trained/<part>.pt with the harmonic rule where it exists; "
+                    "otherwise the graspability index alone, with a notice.")
+    parser.add_argument("--picks", type=int, default=5, help="picks to make (default: 5)")
+    parser.add_argument("--part", default=None,
+                        help="fill the pile with this part: a built-in name (u_hook, s_hook, "
+                             "c_ring, j_hook, e_shape) or a mesh file (default: the "
+                             "scenario's)")
+    add_scenario_argument(parser)
+    parser.add_argument("--seed", type=int, default=None,
+                        help="pile seed (default: the scenario's pile.seed)")
+    parser.add_argument("--rule", choices=RULES, default=None,
+                        help="selection rule (default: harmonic with a model, else "
+                             "graspability)")
+    parser.add_argument("--model", type=Path, default=None,
+                        help="tangle CNN checkpoint (default: tangle_drake/trained/<part>.pt)")
+    parser.add_argument("--meshcat", action="store_true",
+                        help="show the simulation live in Meshcat (on localhost)")
+    parser.add_argument("--record", type=Path, default=None, metavar="HTML",
+                        help="write a self-contained Meshcat replay of the picks to this "
+                             ".html file")
+    parser.add_argument("--diagram", type=Path, default=None,
+                        help="also draw the pick diagram to this .svg/.png/.dot file")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from tangle_drake.pick.demo import DemoOptions, run_demo
+
+    run_demo(DemoOptions(
+        picks=args.picks, part=args.part, scenario=args.scenario, seed=args.seed,
+        rule=args.rule, model=args.model, meshcat=args.meshcat, record=args.record,
+        diagram=args.diagram))
+    if args.meshcat and sys.stdin.isatty():
+        input("Meshcat stays up until you press Enter.")
+    return 0

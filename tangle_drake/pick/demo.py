@@ -1,0 +1,173 @@
+"""The pick demo: a settled pile, then the pick diagram simulated until N picks are done.
+
+``run_demo`` does what ``tangle-drake demo`` does, for scripts and tests; it reports through
+a callback (``print`` by default) and returns the pick records.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+from pydrake.geometry import Meshcat, MeshcatParams
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import Context, Diagram
+
+from tangle_drake.bin_model import inside_bin
+from tangle_drake.commands.diagram import write_graphviz
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.parts import load_part
+from tangle_drake.pick.diagram import PickDiagram, build_pick_diagram, thinnest_wire
+from tangle_drake.pick.outcome import PickRecord, summarize
+from tangle_drake.pick.planner import Mode, PickSettings
+from tangle_drake.pick.selection import resolve_tangle_choice
+from tangle_drake.pile import drop_pile, part_bodies
+from tangle_drake.planning.arm_motion import ArmMotion
+from tangle_drake.scenario import PartCount, PileConfig, Scenario
+from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.station import PLANT_NAME, build_station, hold_robot_still
+
+EMPTY_FRACTION = 0.25
+"""Fingers closed below this fraction of the wire's diameter hold nothing (the compliant pads
+squeeze a held wire to about half its diameter; empty fingers close to under 1 mm)."""
+
+RECORD_FPS = 20.0
+"""Frames per second of ``--record``'s replay: smooth enough, and a third of Meshcat's 64
+(a five-pick replay is ~8 MB instead of ~22 MB)."""
+
+SIM_TIME_PER_PICK = 60.0
+"""Simulated seconds a pick may take before the demo gives up, s (a pick takes ~12 s)."""
+
+
+@dataclass(frozen=True)
+class DemoOptions:
+    """What ``tangle-drake demo`` was asked for (``None``: the scenario's or the default)."""
+
+    picks: int = 5
+    part: str | None = None
+    scenario: Scenario | str | Path | None = None
+    """A scenario, or its file (a shipped name such as ``pick_demo.yaml`` is found too)."""
+    seed: int | None = None
+    rule: str | None = None
+    model: str | Path | None = None
+    meshcat: bool = False
+    record: Path | None = None
+    diagram: Path | None = None
+
+
+def with_part(scenario: Scenario, part: str | None) -> Scenario:
+    """``scenario`` with its pile made of ``part`` only (as many as before); checks the part."""
+    if part is None:
+        return scenario
+    load_part(part)  # a clear TangleDrakeError for an unknown part or a bad mesh
+    pile = replace(scenario.pile, parts=[PartCount(part, scenario.pile.total_count, 1.0)])
+    return replace(scenario, pile=pile)
+
+
+def empty_width(pile: PileConfig) -> float:
+    """The gripper opening below which it holds nothing: a fraction of the thinnest wire in
+    the pile (the planner's default for mesh parts, whose wire is unknown)."""
+    wire = thinnest_wire(pile)
+    return PickSettings.empty_width if wire is None else EMPTY_FRACTION * wire
+
+
+def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[PickRecord]:
+    """Build, drop a pile, pick ``options.picks`` times; returns the finished picks."""
+    if options.picks < 1:
+        raise TangleDrakeError(f"--picks must be at least 1, got {options.picks}")
+    if options.record is not None and Path(options.record).suffix.lower() != ".html":
+        raise TangleDrakeError(f"--record must name an .html file, not {options.record}")
+    scenario = options.scenario if isinstance(options.scenario, Scenario) else resolve_scenario(
+        options.scenario)
+    scenario = with_part(scenario, options.part)
+    if scenario.pile.total_count == 0:
+        raise TangleDrakeError("the scenario's pile has no parts: there is nothing to pick")
+    part = options.part or scenario.pile.parts[0].part
+    choice = resolve_tangle_choice(part, options.rule, options.model)
+    if choice.notice:
+        say(choice.notice)
+    say(f"selection: rule {choice.rule}" + (f", model {choice.model}" if choice.model else ""))
+
+    meshcat = None
+    if options.meshcat or options.record:
+        meshcat = Meshcat(MeshcatParams(host="localhost"))
+        say(f"Meshcat: {meshcat.web_url()}")
+    start = time.perf_counter()
+    station = build_station(scenario, meshcat)
+    pile_state = _settled_pile(station, scenario, options.seed, say)
+    settings = PickSettings(max_picks=options.picks, empty_width=empty_width(scenario.pile))
+    pick = build_pick_diagram(scenario, choice, ArmMotion(scenario.bin), station=station,
+                              settings=settings, seed=options.seed or 0)
+    if options.diagram is not None:
+        write_graphviz(pick.diagram.GetGraphvizString(max_depth=1), Path(options.diagram))
+        say(f"wrote {options.diagram}")
+    simulator = _simulator(pick, pile_state)
+    say(f"set-up {time.perf_counter() - start:.1f} s; picking {options.picks} part(s)")
+
+    if meshcat is not None and options.record:
+        meshcat.StartRecording(RECORD_FPS, set_visualizations_while_recording=options.meshcat)
+    records = _run(simulator, pick, options.picks, say)
+    if meshcat is not None and options.record:
+        meshcat.StopRecording()
+        meshcat.PublishRecording()
+        Path(options.record).parent.mkdir(parents=True, exist_ok=True)
+        Path(options.record).write_text(meshcat.StaticHtml())
+        say(f"wrote {options.record}")
+    left = parts_in_bin(pick, simulator.get_context(), scenario)
+    say(f"{summarize(records)}; {left} of {scenario.pile.total_count} parts left in the bin; "
+        f"wall time {time.perf_counter() - start:.0f} s")
+    return records
+
+
+def parts_in_bin(pick: PickDiagram, context: Context, scenario: Scenario) -> int:
+    """Simulation only: how many parts lie in the bin now (the released ones lie outside)."""
+    plant = pick.station.GetSubsystemByName(PLANT_NAME)
+    plant_context = plant.GetMyContextFromRoot(context)
+    return sum(bool(inside_bin(scenario.bin, body.EvalPoseInWorld(plant_context).translation()))
+               for body in part_bodies(plant))
+
+
+def _settled_pile(station: Diagram, scenario: Scenario, seed: int | None,
+                  say: Callable[[str], None]) -> np.ndarray:
+    """Drop the pile in the bare station (the robot held at home); its plant state."""
+    simulator = Simulator(station)
+    hold_robot_still(station, simulator.get_mutable_context())
+    simulator.Initialize()
+    report = drop_pile(simulator, scenario.bin, scenario.pile, seed=seed)
+    say(f"pile: {report.num_in_bin}/{report.num_parts} parts in the bin, settled in "
+        f"{report.wall_time:.1f} s")
+    plant = station.GetSubsystemByName(PLANT_NAME)
+    return plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(simulator.get_context()))
+
+
+def _simulator(pick: PickDiagram, plant_state: np.ndarray) -> Simulator:
+    """A simulator of the pick diagram starting from the settled pile."""
+    simulator = Simulator(pick.diagram)
+    context = simulator.get_mutable_context()
+    plant = pick.station.GetSubsystemByName(PLANT_NAME)
+    plant.SetPositionsAndVelocities(plant.GetMyMutableContextFromRoot(context), plant_state)
+    simulator.Initialize()
+    return simulator
+
+
+def _run(simulator: Simulator, pick: PickDiagram, picks: int,
+         say: Callable[[str], None]) -> list[PickRecord]:
+    """Advance until the planner is done (or out of time), reporting each pick as it ends."""
+    context = simulator.get_context()
+    mode_port, picks_port = pick.diagram.GetOutputPort("mode"), pick.diagram.GetOutputPort("picks")
+    reported = 0
+    records: list[PickRecord] = []
+    limit = picks * SIM_TIME_PER_PICK
+    while mode_port.Eval(context) is not Mode.DONE:
+        if context.get_time() >= limit:
+            say(f"stopped: {picks} pick(s) not done after {limit:.0f} s of simulated time")
+            break
+        simulator.AdvanceTo(context.get_time() + 0.5)
+        records = picks_port.Eval(context)
+        for record in records[reported:]:
+            say(record.describe())
+        reported = len(records)
+    return list(picks_port.Eval(context))

@@ -1,0 +1,148 @@
+"""The pick diagram: station, graspability, tangle CNN, pick planner and (in simulation) the
+lift monitor, wired by port name so the same builder serves the hardware station.
+
+    camera.depth_image -> GraspabilitySystem -> candidates ----------------> PickPlanner
+                       \\-> TangleCnnSystem -> scored_candidates, selected_grasp -/
+    nextage.state_measured, gripper.state_measured ------------------------> PickPlanner
+    PickPlanner -> nextage.position, gripper.position -> station
+    sim.body_poses -> LiftMonitor -> lifted_count -> PickPlanner   (simulation only)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from pydrake.geometry import Meshcat
+from pydrake.systems.framework import Diagram, DiagramBuilder
+
+from tangle_drake.bin_model import inner_corners
+from tangle_drake.camera import CameraModel
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.graspability import GraspabilityParams, bin_roi
+from tangle_drake.graspability.system import GraspabilitySystem
+from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_spec
+from tangle_drake.pick.motion import Motion
+from tangle_drake.pick.outcome import LiftMonitor
+from tangle_drake.pick.planner import PickPlanner, PickSettings
+from tangle_drake.pick.selection import TangleChoice
+from tangle_drake.scenario import BinConfig, PileConfig, Scenario
+from tangle_drake.station import PLANT_NAME, build_station, camera_model
+
+
+@dataclass
+class PickDiagram:
+    """The built diagram and the parts of it a driver needs."""
+
+    diagram: Diagram
+    station: Diagram
+    planner: PickPlanner
+    monitor: LiftMonitor | None
+    """``None`` on a station without simulation ports."""
+
+
+def palm_margin_px(camera: CameraModel, bin_config: BinConfig,
+                   spec: GripperSpec = DEFAULT_GRIPPER) -> int:
+    """Pixels to keep the fingers' footprint off the bin's edge so the wider palm fits too.
+
+    Graspability plans for the fingers; the palm, wider on every side, goes below the rim
+    on deep grasps, and near a wall it would hit it. Measured at the bin floor's depth, where
+    pixels are smallest in metres (so the margin is never too small).
+    """
+    palm_x, palm_y, _ = spec.palm_size
+    extra = max((palm_y - spec.outer_width_open) / 2, (palm_x - spec.finger_width) / 2, 0.0)
+    floor_depth = float(camera.X_WC[2, 3]) - bin_config.floor_height
+    metres_per_px = floor_depth / camera.intrinsics.fx
+    return math.ceil(extra / metres_per_px)
+
+
+def thinnest_wire(pile: PileConfig) -> float | None:
+    """Diameter of the thinnest built-in wire part in the pile, m; ``None`` for mesh parts
+    only, whose wire is unknown."""
+    wires = [builtin_spec(e.part).wire_diameter * e.mesh_scale for e in pile.parts
+             if e.part in BUILTIN_PARTS]
+    return min(wires) if wires else None
+
+
+def default_graspability_params(scenario: Scenario) -> GraspabilityParams:
+    """Graspability settings for picking with the real fingers.
+
+    The insertion depth is one depth level less than the thinnest wire, so a wire lying alone
+    on the bin's floor still has its top above the fingertips' level plus the insertion
+    (the planner presses the grasp deeper anyway, see ``ApproachSettings.press_depth``).
+    The candidates keep the palm's overhang off the bin's walls (:func:`palm_margin_px`), and
+    there are twice the index's default number of them, as the arm cannot reach every one
+    (deep in the bin, near the wall on the robot's side, the wrist meets the wall).
+    """
+    defaults = GraspabilityParams()
+    wire = thinnest_wire(scenario.pile)
+    insertion = defaults.insertion_depth_m if wire is None else max(
+        defaults.insertion_depth_m, wire - defaults.level_step_m)
+    return replace(defaults, insertion_depth_m=insertion, top_k=2 * defaults.top_k,
+                   roi_margin_px=palm_margin_px(camera_model(scenario), scenario.bin))
+
+
+def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion, *,
+                       station: Diagram | None = None, settings: PickSettings | None = None,
+                       params: GraspabilityParams | None = None, seed: int = 0,
+                       meshcat: Meshcat | None = None) -> PickDiagram:
+    """Wire the pick diagram around ``station`` (built from ``scenario`` if not given).
+
+    ``choice`` says whether a tangle CNN runs (and which rule selects); ``motion`` moves the
+    arm (``ArmMotion`` for the Nextage); ``params`` default to
+    :func:`default_graspability_params`; ``seed`` seeds the ``random`` rule; ``meshcat`` is
+    passed to a station built here.
+    """
+    station = station or build_station(scenario, meshcat)
+    needed = [(motion.measured_port, True), ("gripper.state_measured", True),
+              ("camera.depth_image", True), (motion.command_port, False),
+              ("gripper.position", False)]
+    for port, output in needed:
+        if not (station.HasOutputPort(port) if output else station.HasInputPort(port)):
+            raise TangleDrakeError(f"the station has no {port!r} port: picking needs the "
+                                   "robot, its gripper and the top camera (a scenario whose "
+                                   "directives add them, like pick_demo.yaml)")
+    camera = camera_model(scenario)
+    roi = bin_roi(camera, inner_corners(scenario.bin))
+    params = params or default_graspability_params(scenario)
+
+    builder = DiagramBuilder()
+    builder.AddSystem(station)
+    graspability = builder.AddNamedSystem(
+        "graspability", GraspabilitySystem(camera, DEFAULT_GRIPPER, params, roi))
+    planner = builder.AddNamedSystem("pick_planner", PickPlanner(motion, settings))
+    depth = station.GetOutputPort("camera.depth_image")
+    builder.Connect(depth, graspability.GetInputPort("depth_image"))
+    builder.Connect(graspability.GetOutputPort("candidates"), planner.GetInputPort("candidates"))
+    if choice.model is not None:
+        from tangle_drake.tangle_cnn.system import TangleCnnSystem  # imports torch
+
+        cnn = builder.AddNamedSystem(
+            "tangle_cnn", TangleCnnSystem(Path(choice.model), camera.intrinsics, choice.rule,
+                                          seed))
+        builder.Connect(depth, cnn.GetInputPort("depth_image"))
+        builder.Connect(graspability.GetOutputPort("candidates"), cnn.GetInputPort("candidates"))
+        for port in ("scored_candidates", "selected_grasp"):
+            builder.Connect(cnn.GetOutputPort(port), planner.GetInputPort(port))
+
+    for port in (motion.measured_port, "gripper.state_measured"):
+        builder.Connect(station.GetOutputPort(port), planner.GetInputPort(port))
+    for port in (motion.command_port, "gripper.position"):
+        builder.Connect(planner.GetOutputPort(port), station.GetInputPort(port))
+
+    monitor = None
+    if station.HasOutputPort("sim.body_poses"):
+        plant = station.GetSubsystemByName(PLANT_NAME)
+        monitor = builder.AddNamedSystem("lift_monitor (sim only)",
+                                         LiftMonitor(plant, scenario.bin))
+        builder.Connect(station.GetOutputPort("sim.body_poses"),
+                        monitor.GetInputPort("body_poses"))
+        builder.Connect(monitor.GetOutputPort("lifted_count"),
+                        planner.GetInputPort("lifted_count"))
+    builder.ExportOutput(planner.GetOutputPort("mode"), "mode")
+    builder.ExportOutput(planner.GetOutputPort("picks"), "picks")
+    diagram = builder.Build()
+    diagram.set_name("pick_demo")
+    return PickDiagram(diagram, station, planner, monitor)

@@ -1,0 +1,137 @@
+"""What a pick did: the outcome classes, the record of each pick, and the simulation-only
+monitor that counts the parts the gripper brought up.
+
+A robot alone can tell an empty grasp (the fingers closed further than any part allows), not
+how many parts came up; in simulation, :class:`LiftMonitor` reads the true body poses (a
+``sim.`` port no controller may use) and tells the planner, which records the count. On
+hardware the count input stays unconnected and a held grasp is recorded as ``HELD``.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.systems.framework import BasicVector, Context, LeafSystem
+
+from tangle_drake.pile import part_bodies
+from tangle_drake.scenario import BinConfig
+
+
+class Outcome(enum.Enum):
+    """How one pick ended."""
+
+    ONE = "one part"
+    """Exactly one part came up: the goal."""
+    SEVERAL = "several parts"
+    """More than one part came up: they were tangled."""
+    NONE = "no part"
+    """The gripper came up empty."""
+    HELD = "held"
+    """The gripper holds something; how much is unknown without a counter (hardware)."""
+    FAILED = "failed"
+    """Nothing was attempted: no candidate, or none the robot could reach without collision."""
+
+
+@dataclass(frozen=True)
+class Rejection:
+    """A candidate the motion planner turned down before the one that was tried."""
+
+    rank: int
+    """Its place in the selection's order (0 = the rule's choice)."""
+    reason: str
+
+
+@dataclass
+class PickRecord:
+    """One finished pick: which grasp, what happened, how long each stage took."""
+
+    index: int
+    """1 for the first pick of the run."""
+    outcome: Outcome = Outcome.FAILED
+    reason: str | None = None
+    """Why it failed (``FAILED`` only)."""
+    candidate: Any = None
+    """The grasp candidate tried (a ``GraspCandidate``), ``None`` if none was."""
+    rank: int | None = None
+    """The tried candidate's place in the selection's order."""
+    p_not_tangled: float | None = None
+    """The CNN's estimate for the tried candidate, where a CNN ran."""
+    rejected: list[Rejection] = field(default_factory=list)
+    width: float | None = None
+    """Gripper opening measured after the lift, m."""
+    lifted: int | None = None
+    """Parts the simulation saw brought up (``None`` without a monitor)."""
+    perception_s: float = 0.0
+    """Wall time of rendering the depth image and the graspability index, s."""
+    cnn_s: float = 0.0
+    """Wall time of the tangle CNN and the selection rule, s."""
+    planning_s: float = 0.0
+    """Wall time of IK and trajectories, over every candidate tried, s."""
+    execution_s: float = 0.0
+    """Robot (simulated) time from the start of the approach to the return home, s."""
+
+    def describe(self) -> str:
+        """One line for people: the outcome, then the timings."""
+        if self.outcome is Outcome.FAILED:
+            what = f"failed: {self.reason}"
+        else:
+            what = self.outcome.value
+            if self.lifted is not None and self.outcome is Outcome.SEVERAL:
+                what += f" ({self.lifted})"
+        tried = ""
+        if self.candidate is not None:
+            p = "" if self.p_not_tangled is None else f", P(not tangled) {self.p_not_tangled:.2f}"
+            rejected = f", {len(self.rejected)} rejected before" if self.rejected else ""
+            tried = (f" | candidate #{self.rank} (graspability {self.candidate.score:.2f}{p}"
+                     f"{rejected})")
+        return (f"pick {self.index}: {what}{tried} | perception {self.perception_s * 1e3:.0f} ms, "
+                f"CNN {self.cnn_s * 1e3:.0f} ms, planning {self.planning_s * 1e3:.0f} ms, "
+                f"execution {self.execution_s:.1f} s")
+
+
+def summarize(records: Sequence[PickRecord]) -> str:
+    """One line: how many picks ended how."""
+    counts = Counter(record.outcome for record in records)
+    parts = [f"{counts[outcome]} {outcome.value}" for outcome in Outcome if counts[outcome]]
+    return f"{len(records)} pick(s): " + (", ".join(parts) if parts else "none")
+
+
+class LiftMonitor(LeafSystem):
+    """Simulation only: the number of parts hanging from the gripper, from true body poses.
+
+    A part counts when its centre is more than ``margin`` above the bin's rim and within
+    ``radius`` (horizontally) of the gripper: above the rim it cannot be lying in the bin, and
+    near the gripper it is not a part that was flung out. Input ``body_poses`` takes the
+    station's ``sim.body_poses``; output ``lifted_count`` is a 1-vector.
+    """
+
+    def __init__(self, plant: MultibodyPlant, bin_config: BinConfig, margin: float = 0.02,
+                 radius: float = 0.15, gripper_body: str = "gripper_base") -> None:
+        super().__init__()
+        self._parts = [int(body.index()) for body in part_bodies(plant)]
+        self._gripper = int(plant.GetBodyByName(gripper_body).index())
+        self._height = bin_config.floor_height + bin_config.wall_height + margin
+        self._radius = radius
+        self._poses = self.DeclareAbstractInputPort(
+            "body_poses", plant.get_body_poses_output_port().Allocate())
+        self.DeclareVectorOutputPort("lifted_count", 1, self._calc_count)
+
+    def lifted_parts(self, context: Context) -> list[int]:
+        """Body indices of the parts counted now."""
+        poses = self._poses.Eval(context)
+        p_gripper = poses[self._gripper].translation()
+        lifted = []
+        for index in self._parts:
+            p = poses[index].translation()
+            if p[2] > self._height and np.linalg.norm(p[:2] - p_gripper[:2]) < self._radius:
+                lifted.append(index)
+        return lifted
+
+    def _calc_count(self, context: Context, output: BasicVector) -> None:
+        output.SetAtIndex(0, float(len(self.lifted_parts(context))))

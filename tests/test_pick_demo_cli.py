@@ -1,0 +1,62 @@
+"""``tangle-drake demo``'s refusals, and which model and rule a part gets."""
+
+import argparse
+
+import pytest
+
+from tangle_drake.commands import demo
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.pick import selection
+from tangle_drake.pick.selection import resolve_tangle_choice
+
+
+def run_demo_command(*argv: str) -> None:
+    parser = argparse.ArgumentParser()
+    demo.register(parser.add_subparsers())
+    args = parser.parse_args(["demo", *argv])
+    args.func(args)
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--part", "no_such_part"], "unknown part 'no_such_part'"),
+    (["--model", "missing.pt"], "model file not found: missing.pt"),
+    (["--rule", "cnn"], "rule 'cnn' needs a tangle model"),
+    (["--picks", "0"], "--picks must be at least 1"),
+    (["--record", "demo.txt"], "--record must name an .html file"),
+    (["--scenario", "no/such.yaml"], "cannot read scenario file"),
+    (["--scenario", "pile_only.yaml"], "the station has no 'nextage.state_measured' port"),
+])
+def test_bad_arguments_are_refused_with_a_clear_message(argv, message):
+    with pytest.raises(TangleDrakeError, match=message):
+        run_demo_command(*argv)
+
+
+def test_an_unknown_rule_is_refused_by_the_parser(capsys):
+    with pytest.raises(SystemExit):
+        run_demo_command("--rule", "best")
+    assert "invalid choice: 'best'" in capsys.readouterr().err
+
+
+def test_without_a_trained_model_the_graspability_rule_is_used_with_a_notice(tmp_path,
+                                                                           monkeypatch):
+    monkeypatch.setattr(selection, "TRAINED_DIR", tmp_path)
+    choice = resolve_tangle_choice("u_hook")
+    assert choice.model is None and choice.rule == "graspability"
+    assert "no trained tangle model for part 'u_hook'" in choice.notice
+    # Asking for graspability explicitly needs no notice.
+    assert resolve_tangle_choice("u_hook", "graspability").notice is None
+
+
+def test_a_shipped_model_is_used_with_the_harmonic_rule(tmp_path, monkeypatch):
+    monkeypatch.setattr(selection, "TRAINED_DIR", tmp_path)
+    (tmp_path / "u_hook.pt").write_bytes(b"weights")
+    choice = resolve_tangle_choice("u_hook")
+    assert choice.model == tmp_path / "u_hook.pt" and choice.rule == "harmonic"
+    assert choice.notice is None
+    assert resolve_tangle_choice("u_hook", "random").rule == "random"
+
+
+def test_an_explicit_model_wins(tmp_path):
+    model = tmp_path / "mine.pt"
+    model.write_bytes(b"weights")
+    assert resolve_tangle_choice("c_ring", "cnn", model) == selection.TangleChoice(model, "cnn")

@@ -1,0 +1,206 @@
+"""The pick state machine with a stand-in manipulator and hand-made candidates."""
+
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+from pydrake.common.value import AbstractValue
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder, LeafSystem
+from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
+
+from tangle_drake.pick.motion import PickMotion, PlanningError
+from tangle_drake.pick.outcome import Outcome, summarize
+from tangle_drake.pick.planner import Mode, PickPlanner, PickSettings, rank_scored
+from tangle_drake.planning.trajectory import rest_to_rest
+from tangle_drake.tangle_cnn.system import ScoredCandidate
+
+
+@dataclass(frozen=True, eq=False)
+class Candidate:
+    u: float
+    v: float
+    angle_deg: float
+    score: float
+    pose: np.ndarray
+    depth_m: float = 0.5
+    width_m: float = 0.045
+
+
+def candidate(index: int, score: float) -> Candidate:
+    pose = np.eye(4)
+    pose[0, 3] = index  # the fake motion reads the candidate's index from x
+    return Candidate(10.0 * index, 20.0, 45.0, score, pose)
+
+
+class FakeMotion:
+    """A 2-joint manipulator; candidates whose index is in ``unreachable`` cannot be planned."""
+
+    command_port = "arm.position"
+    command_size = 2
+    measured_port = "arm.state_measured"
+    measured_size = 4
+
+    def __init__(self, unreachable: tuple[int, ...] = ()) -> None:
+        self.unreachable = unreachable
+        self.planned: list[int] = []
+
+    def hold_command(self, measured: np.ndarray) -> np.ndarray:
+        return np.asarray(measured[:2]).copy()
+
+    def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray) -> PickMotion:
+        index = int(X_WT[0, 3])
+        if index in self.unreachable:
+            raise PlanningError("unreachable", f"candidate {index} is out of reach")
+        self.planned.append(index)
+        home, there = np.zeros(2), np.array([0.3, -0.2])
+        go, back = (rest_to_rest(home, there, 1.0, 1.5),
+                    rest_to_rest(there, home, 1.0, 1.5))
+        return PickMotion(go, back, go, back, rest_to_rest(home, home, 1.0, 1.5), X_WT)
+
+
+class CountingCandidates(LeafSystem):
+    """A candidate list that counts how often it is computed (each look is at a new time)."""
+
+    def __init__(self, candidates: list) -> None:
+        super().__init__()
+        self.candidates = candidates
+        self.calls = 0
+        self.DeclareAbstractOutputPort("candidates", lambda: AbstractValue.Make([]), self._calc,
+                                       {self.time_ticket()})
+
+    def _calc(self, context, value) -> None:
+        self.calls += 1
+        value.set_value(list(self.candidates))
+
+
+def run(candidates, motion=None, width=0.003, lifted=None, scored=None, picks=2,
+        duration=30.0):
+    """Simulate the planner alone; returns (records, modes visited, gripper command on entering
+    each mode, source)."""
+    motion = motion or FakeMotion()
+    builder = DiagramBuilder()
+    planner = builder.AddSystem(PickPlanner(motion, PickSettings(max_picks=picks)))
+    source = builder.AddSystem(CountingCandidates(candidates))
+    builder.Connect(source.get_output_port(), planner.GetInputPort("candidates"))
+    measured = builder.AddSystem(ConstantVectorSource(np.zeros(4)))
+    builder.Connect(measured.get_output_port(), planner.GetInputPort("arm.state_measured"))
+    gripper = builder.AddSystem(ConstantVectorSource(np.array([width, 0.0])))
+    builder.Connect(gripper.get_output_port(), planner.GetInputPort("gripper.state_measured"))
+    if lifted is not None:
+        count = builder.AddSystem(ConstantVectorSource(np.array([float(lifted)])))
+        builder.Connect(count.get_output_port(), planner.GetInputPort("lifted_count"))
+    if scored is not None:
+        scores = builder.AddSystem(ConstantValueSource(AbstractValue.Make(scored)))
+        builder.Connect(scores.get_output_port(), planner.GetInputPort("scored_candidates"))
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    context = planner.GetMyContextFromRoot(simulator.get_context())
+    modes, widths = [], {}
+    while simulator.get_context().get_time() < duration:
+        simulator.AdvanceTo(simulator.get_context().get_time() + 0.01)
+        mode = planner.GetOutputPort("mode").Eval(context)
+        if not modes or modes[-1] is not mode:
+            modes.append(mode)
+            widths.setdefault(mode, planner.GetOutputPort("gripper.position").Eval(context)[0])
+        if mode is Mode.DONE:
+            break
+    return planner.GetOutputPort("picks").Eval(context), modes, widths, source
+
+
+PICK_MODES = [Mode.SETTLE, Mode.PERCEIVE, Mode.APPROACH, Mode.DESCEND, Mode.CLOSE, Mode.LIFT,
+              Mode.CHECK, Mode.TRANSFER, Mode.RELEASE, Mode.HOME]
+
+
+def test_a_pick_passes_every_mode_in_order_and_looks_once_per_pick():
+    records, modes, _, source = run([candidate(0, 0.9)], lifted=1, picks=2)
+    assert modes == PICK_MODES + PICK_MODES + [Mode.DONE]
+    assert [r.outcome for r in records] == [Outcome.ONE, Outcome.ONE]
+    assert source.calls == 2  # perception ran only when perceiving
+    record = records[0]
+    assert record.rank == 0 and record.width == pytest.approx(0.003) and record.lifted == 1
+    assert record.execution_s > 0 and record.planning_s > 0
+    assert summarize(records) == "2 pick(s): 2 one part"
+
+
+def test_the_gripper_opens_for_the_approach_closes_to_zero_and_releases():
+    _, _, widths, _ = run([candidate(0, 0.9)], lifted=1, picks=1)
+    open_width = PickSettings().open_width
+    assert widths[Mode.APPROACH] == open_width
+    assert widths[Mode.CLOSE] == open_width  # first the arm settles at the bottom
+    assert widths[Mode.LIFT] == widths[Mode.TRANSFER] == 0.0
+    assert widths[Mode.RELEASE] == open_width
+
+
+def test_fingers_closed_past_the_threshold_mean_an_empty_grasp():
+    records, modes, _, _ = run([candidate(0, 0.9)], width=0.0005, lifted=1, picks=1)
+    assert records[0].outcome is Outcome.NONE
+    assert Mode.TRANSFER in modes and modes[-1] is Mode.DONE  # it still goes home
+
+
+@pytest.mark.parametrize(("lifted", "outcome"), [(2, Outcome.SEVERAL), (0, Outcome.NONE),
+                                                 (None, Outcome.HELD)])
+def test_the_simulations_count_classifies_a_held_grasp(lifted, outcome):
+    records, _, _, _ = run([candidate(0, 0.9)], lifted=lifted, picks=1)
+    assert records[0].outcome is outcome
+
+
+def test_an_unreachable_candidate_is_recorded_and_the_next_one_tried():
+    motion = FakeMotion(unreachable=(0,))
+    records, _, _, _ = run([candidate(0, 0.9), candidate(1, 0.5)], motion, lifted=1, picks=1)
+    record = records[0]
+    assert record.outcome is Outcome.ONE
+    assert record.rank == 1 and record.candidate.u == 10.0
+    assert [r.rank for r in record.rejected] == [0]
+    assert "unreachable" in record.rejected[0].reason
+    assert motion.planned == [1]
+
+
+def test_no_reachable_candidate_fails_the_pick_and_stops():
+    motion = FakeMotion(unreachable=(0, 1))
+    records, modes, _, _ = run([candidate(0, 0.9), candidate(1, 0.5)], motion, picks=3)
+    assert len(records) == 1
+    assert records[0].outcome is Outcome.FAILED
+    assert records[0].reason == "no candidate can be picked (2 unreachable)"
+    assert modes == [Mode.SETTLE, Mode.PERCEIVE, Mode.DONE]
+
+
+def test_no_candidate_fails_the_pick_and_stops():
+    records, modes, _, _ = run([], picks=3)
+    assert [r.outcome for r in records] == [Outcome.FAILED]
+    assert "no grasp candidate" in records[0].reason
+    assert modes[-1] is Mode.DONE
+
+
+def test_scored_candidates_set_the_order():
+    low, high = candidate(0, 0.9), candidate(1, 0.5)
+    scored = [ScoredCandidate(low, 0.1, 0.2), ScoredCandidate(high, 0.95, 0.7)]
+    motion = FakeMotion()
+    records, _, _, _ = run([low, high], motion, lifted=1, scored=scored, picks=1)
+    assert motion.planned == [1]
+    assert records[0].p_not_tangled == pytest.approx(0.95)
+
+
+def test_rank_scored_puts_the_selected_grasp_first():
+    a, b, c = candidate(0, 0.9), candidate(1, 0.8), candidate(2, 0.7)
+    scored = [ScoredCandidate(a, 0.5, 0.6), ScoredCandidate(b, 0.5, 0.6),
+              ScoredCandidate(c, 0.9, 0.8)]
+    assert [x.u for x, _ in rank_scored(scored)] == [20.0, 0.0, 10.0]  # ties keep the order
+    selected = Candidate(b.u, b.v, b.angle_deg, b.score, b.pose)  # a copy, as ports deliver
+    assert [x.u for x, _ in rank_scored(scored, selected)] == [10.0, 20.0, 0.0]
+
+
+def test_settings_refuse_nonsense():
+    with pytest.raises(ValueError, match="max_picks"):
+        PickSettings(max_picks=0)
+    with pytest.raises(ValueError, match="empty_width"):
+        PickSettings(empty_width=0.0)
+
+
+def test_a_grasp_that_came_up_empty_is_not_repeated():
+    motion = FakeMotion()
+    records, _, _, _ = run([candidate(0, 0.9), candidate(1, 0.5)], motion, width=0.0005,
+                           picks=2)
+    assert [r.outcome for r in records] == [Outcome.NONE, Outcome.NONE]
+    assert motion.planned == [0, 1]
+    assert records[1].rank == 1 and "repeat" in records[1].rejected[0].reason

@@ -1,0 +1,195 @@
+"""IK, trajectories and whole-pick plans for the Nextage's left arm, on the planning plant."""
+
+import itertools
+
+import numpy as np
+import pytest
+from pydrake.math import RigidTransform, RotationMatrix
+
+from tangle_drake.pick.motion import PlanningError
+from tangle_drake.planning.arm_motion import ArmMotion
+from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses, symmetric_grasps
+from tangle_drake.planning.trajectory import chain, first_violation, hold, rest_to_rest
+from tangle_drake.robot import HOME, LEFT_ARM
+from tangle_drake.scenario_files import resolve_scenario
+
+BIN = resolve_scenario(None).bin  # the demo's
+RIM = BIN.floor_height + BIN.wall_height
+MEASURED_HOME = np.concatenate([HOME, np.zeros_like(HOME)])
+
+
+def top_down(x: float, y: float, z: float, yaw_deg: float = 0.0) -> RigidTransform:
+    """A tool pose pointing straight down, closing along world -y turned by ``yaw_deg``."""
+    R = RotationMatrix.MakeZRotation(np.radians(yaw_deg)) @ RotationMatrix.MakeXRotation(np.pi)
+    return RigidTransform(R, [x, y, z])
+
+
+def angle_between(a: RotationMatrix, b: RotationMatrix) -> float:
+    return abs(a.inverse().multiply(b).ToAngleAxis().angle())
+
+
+IN_BIN = top_down(BIN.center[0], BIN.center[1] + 0.03, BIN.floor_height + 0.022, 120.0)
+
+
+@pytest.fixture(scope="module")
+def motion() -> ArmMotion:
+    return ArmMotion(BIN)
+
+
+def test_ik_reaches_a_pose_in_the_bin_within_limits(motion):
+    q = motion.ik.solve(IN_BIN, motion.q_home)
+    assert q is not None
+    X = motion.model.tcp_pose(q)
+    assert np.linalg.norm(X.translation() - IN_BIN.translation()) < 1e-3
+    assert angle_between(X.rotation(), IN_BIN.rotation()) < 0.02
+    arm = motion.model.arm_indices
+    assert np.all(q[arm] >= motion.model.lower[arm]) and np.all(q[arm] <= motion.model.upper[arm])
+    # Only the arm moved: chest, head, right arm and fingers kept the seed's values.
+    others = np.setdiff1d(np.arange(len(q)), arm)
+    assert np.allclose(q[others], motion.q_home[others])
+
+
+def test_ik_reports_a_pose_out_of_reach(motion):
+    assert motion.ik.solve(top_down(1.2, 0.2, 1.0), motion.q_home) is None
+    # Within reach of nothing: pointing up under the bin.
+    assert motion.ik.solve(RigidTransform([0.34, 0.22, 0.3]), motion.q_home) is None
+
+
+def test_the_symmetric_twin_nearer_the_current_wrist_comes_first():
+    current = RotationMatrix.MakeXRotation(np.pi)  # closing along -y
+    along_y = top_down(0, 0, 1, 0.0)  # closing along -y (X rotation by pi flips y)
+    flipped = top_down(0, 0, 1, 180.0)
+    first, second = symmetric_grasps(flipped, current)
+    assert angle_between(first.rotation(), along_y.rotation()) < 1e-9
+    assert angle_between(second.rotation(), flipped.rotation()) < 1e-9
+
+
+TIPS_BELOW_TCP = 0.01
+
+
+def test_pick_poses_press_in_clear_the_rim_and_lift_out_of_the_bin():
+    settings = ApproachSettings()
+    poses = pick_poses(IN_BIN, BIN, settings)
+    grasp = IN_BIN.translation() - [0.0, 0.0, settings.press_depth]
+    assert np.allclose(poses.grasp.translation(), grasp)
+    assert poses.pregrasp.translation()[2] - TIPS_BELOW_TCP >= RIM + settings.rim_clearance - 1e-9
+    assert np.isclose(poses.slow_start.translation()[2], grasp[2] + settings.slow_distance)
+    assert np.isclose(poses.lift.translation()[2], RIM + settings.lift_height)
+    assert np.allclose(poses.lift.translation()[:2], grasp[:2])
+
+
+def test_pressing_in_stops_short_of_the_floor():
+    settings = ApproachSettings()
+    low = top_down(0.34, 0.22, BIN.floor_height + TIPS_BELOW_TCP + 0.002)
+    tips = pick_poses(low, BIN, settings).grasp.translation()[2] - TIPS_BELOW_TCP
+    assert np.isclose(tips, BIN.floor_height + settings.floor_clearance)
+    on_floor = top_down(0.34, 0.22, BIN.floor_height + TIPS_BELOW_TCP)
+    assert np.allclose(pick_poses(on_floor, BIN, settings).grasp.translation(),
+                       on_floor.translation())
+
+
+@pytest.mark.parametrize("delta", [[2.0, -0.5, 0.1], [0.05, 0.0, -0.02]])
+def test_rest_to_rest_keeps_within_the_limits(delta):
+    q0 = np.array([0.3, -0.2, 1.0])
+    q1 = q0 + delta
+    trajectory = rest_to_rest(q0, q1, 1.0, 1.5)
+    times = np.linspace(0, trajectory.end_time(), 1001)
+    velocity = np.array([trajectory.EvalDerivative(t, 1).ravel() for t in times])
+    acceleration = np.array([trajectory.EvalDerivative(t, 2).ravel() for t in times])
+    assert np.abs(velocity).max() <= 1.0 + 1e-9
+    assert np.abs(acceleration).max() <= 1.5 + 1e-9
+    assert np.allclose(trajectory.value(0).ravel(), q0)
+    assert np.allclose(trajectory.value(trajectory.end_time()).ravel(), q1)
+    assert np.allclose(velocity[[0, -1]], 0.0)
+
+
+def test_a_path_speed_cap_slows_a_cartesian_leg():
+    trajectory = rest_to_rest(np.zeros(2), np.array([0.02, 0.01]), 1.0, 1.5,
+                              path_length=0.05, max_path_speed=0.01)
+    assert trajectory.end_time() >= 5.0  # 5 cm at no more than 1 cm/s
+
+
+def test_chain_and_hold_run_legs_back_to_back():
+    a = rest_to_rest(np.zeros(2), np.ones(2), 1.0, 1.5)
+    trajectory = chain([a, hold(np.ones(2), 0.5), rest_to_rest(np.ones(2), np.zeros(2), 1.0, 1.5)])
+    assert np.isclose(trajectory.end_time(), 2 * a.end_time() + 0.5)
+    assert np.allclose(trajectory.value(a.end_time() + 0.25).ravel(), 1.0)
+
+
+def test_first_violation_finds_the_blocked_sample():
+    blocked = first_violation([np.zeros(1), np.ones(1)], 0.1, lambda q: q[0] < 0.55)
+    assert blocked is not None and 0.55 <= blocked[0] <= 0.65
+
+
+@pytest.fixture(scope="module")
+def plan(motion):
+    return motion.plan_pick(IN_BIN.GetAsMatrix4(), MEASURED_HOME)
+
+
+PHASES = ("approach", "descend", "lift", "transfer", "home")
+
+
+def samples(trajectory, step=0.004):
+    return np.arange(0.0, trajectory.end_time() + 1e-9, step)
+
+
+@pytest.mark.parametrize("phase", PHASES)
+def test_planned_phases_keep_within_the_planning_limits(plan, phase):
+    trajectory = getattr(plan, phase)
+    for t in samples(trajectory):
+        assert np.abs(trajectory.EvalDerivative(t, 1)).max() <= 1.0 + 1e-6
+        assert np.abs(trajectory.EvalDerivative(t, 2)).max() <= 1.5 + 1e-6
+
+
+def test_phases_join_up_and_only_the_left_arm_moves(plan):
+    ends = [getattr(plan, phase) for phase in PHASES]
+    for before, after in itertools.pairwise(ends):
+        assert np.allclose(before.value(before.end_time()), after.value(0.0), atol=1e-9)
+    assert np.allclose(plan.approach.value(0).ravel(), HOME)
+    assert np.allclose(plan.home.value(plan.home.end_time()).ravel(), HOME)
+    for phase in PHASES:
+        trajectory = getattr(plan, phase)
+        moved = trajectory.value(trajectory.end_time()).ravel() - trajectory.value(0).ravel()
+        moved[LEFT_ARM] = 0.0
+        assert np.allclose(moved, 0.0)
+
+
+@pytest.mark.parametrize("phase", PHASES)
+def test_planned_phases_keep_clear_of_the_bin_and_the_robot(motion, plan, phase):
+    trajectory = getattr(plan, phase)
+    near_pile = phase in ("descend", "lift")
+    for t in samples(trajectory, 0.02):
+        clearance = motion.model.clearance(motion.model.full_q(trajectory.value(t).ravel()))
+        # The collision checks sample the joint-space lines; between samples the margin may
+        # shrink by about what the wrist moves in one step.
+        assert clearance.to_bin >= (-0.001 if near_pile else 0.005), t
+        assert clearance.to_self >= 0.0
+
+
+def test_descent_is_straight_and_slow_near_the_part(motion, plan):
+    grasp = plan.X_WT[:3, 3]
+    assert np.allclose(grasp[:2], IN_BIN.translation()[:2])
+    trajectory = plan.descend
+    times = samples(trajectory, 0.01)
+    tcp = np.array([motion.model.tcp_pose(motion.model.full_q(trajectory.value(t).ravel()))
+                    .translation() for t in times])
+    assert np.allclose(tcp[-1], grasp, atol=1e-3)
+    assert np.abs(tcp[:, :2] - grasp[:2]).max() < 0.003  # straight down within 3 mm
+    speed = np.linalg.norm(np.diff(tcp, axis=0), axis=1) / np.diff(times)
+    slow = tcp[1:, 2] < grasp[2] + motion.settings.approach.slow_distance - 0.002
+    assert speed[slow].max() <= motion.settings.slow_speed * 1.1
+
+
+def test_an_unreachable_grasp_is_reported(motion):
+    with pytest.raises(PlanningError) as error:
+        motion.plan_pick(top_down(0.75, -0.3, 0.95).GetAsMatrix4(), MEASURED_HOME)
+    assert error.value.kind == "unreachable"
+
+
+def test_a_grasp_whose_palm_hits_the_wall_is_reported(motion):
+    # Fingers closing along y, 2.5 cm from the left wall: the 9 cm palm reaches into it.
+    wall_y = BIN.center[1] + BIN.inner_size[1] / 2
+    X = top_down(BIN.center[0], wall_y - 0.025, BIN.floor_height + 0.015, 0.0)
+    with pytest.raises(PlanningError) as error:
+        motion.plan_pick(X.GetAsMatrix4(), MEASURED_HOME)
+    assert error.value.kind == "collision"
