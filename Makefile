@@ -19,7 +19,7 @@ install: $(BIN)/python
 	$(BIN)/pip install --quiet -e ".[dev]"
 
 demo: install
-	$(BIN)/tangle-drake scene --scenario diagrams/pick_demo.yaml --out out/scene
+	$(BIN)/tangle-drake demo --picks 5
 
 lint: install
 	$(BIN)/ruff check .
