@@ -9,7 +9,13 @@ from pydrake.math import RigidTransform, RotationMatrix
 from tangle_drake.pick.motion import PlanningError
 from tangle_drake.planning.arm_motion import ArmMotion
 from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses, symmetric_grasps
-from tangle_drake.planning.trajectory import chain, first_violation, hold, rest_to_rest
+from tangle_drake.planning.trajectory import (
+    chain,
+    first_violation,
+    hold,
+    rest_to_rest,
+    through_waypoints,
+)
 from tangle_drake.robot import HOME, LEFT_ARM
 from tangle_drake.scenario_files import resolve_scenario
 
@@ -107,6 +113,26 @@ def test_a_path_speed_cap_slows_a_cartesian_leg():
     trajectory = rest_to_rest(np.zeros(2), np.array([0.02, 0.01]), 1.0, 1.5,
                               path_length=0.05, max_path_speed=0.01)
     assert trajectory.end_time() >= 5.0  # 5 cm at no more than 1 cm/s
+
+
+def test_a_move_through_waypoints_keeps_within_the_limits_without_stopping():
+    rng = np.random.default_rng(0)
+    waypoints = [np.zeros(6)]
+    for _ in range(5):  # nearly collinear, like a Cartesian line split for straightness
+        waypoints.append(waypoints[-1] + [0.05, -0.03, 0.02, 0.0, 0.01, 0.0]
+                         + rng.normal(0.0, 0.003, 6))
+    trajectory = through_waypoints(waypoints, 1.0, 1.5)
+    times = np.linspace(0, trajectory.end_time(), 2001)
+    velocity = np.array([trajectory.EvalDerivative(t, 1).ravel() for t in times])
+    acceleration = np.array([trajectory.EvalDerivative(t, 2).ravel() for t in times])
+    assert np.abs(velocity).max() <= 1.0 + 1e-6
+    assert np.abs(acceleration).max() <= 1.5 + 1e-6
+    assert np.allclose(trajectory.value(0).ravel(), waypoints[0])
+    assert np.allclose(trajectory.value(trajectory.end_time()).ravel(), waypoints[-1])
+    speed = np.linalg.norm(velocity, axis=1)
+    assert speed[[0, -1]].max() < 1e-9 and speed[200:-200].min() > 0.1  # no stop on the way
+    for q in waypoints[1:-1]:  # passes (close to) every waypoint
+        assert min(np.linalg.norm(trajectory.value(t).ravel() - q) for t in times) < 2e-3
 
 
 def test_chain_and_hold_run_legs_back_to_back():

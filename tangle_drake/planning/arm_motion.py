@@ -6,7 +6,8 @@ configuration), checks every configuration and the joint-space lines between the
 the bin and the robot itself on the planning plant, and turns the lines into rest-to-rest
 trajectories within the planning limits. The descent and the lift are Cartesian: their lines
 are split (by IK at the midpoint) until the tool centre strays less than a tolerance from the
-straight segment, and their speed is capped in metres per second near the pile.
+straight segment, run through without stopping, and their speed is capped in metres per
+second (slowest next to the pile).
 """
 
 from __future__ import annotations
@@ -28,7 +29,12 @@ from tangle_drake.planning.grasp_poses import (
 )
 from tangle_drake.planning.ik import ArmIk, IkSettings
 from tangle_drake.planning.planning_model import PlanningModel
-from tangle_drake.planning.trajectory import chain, first_violation, rest_to_rest
+from tangle_drake.planning.trajectory import (
+    chain,
+    first_violation,
+    rest_to_rest,
+    through_waypoints,
+)
 from tangle_drake.robot import (
     HOME,
     NEXTAGE_JOINTS,
@@ -61,11 +67,7 @@ class ArmMotionSettings:
     self_clearance: float = 0.001
     """Distance the robot keeps from itself, m."""
     straightness: float = 0.002
-    """How far the tool centre may stray from the straight descent and slow lift, m."""
-    lift_straightness: float = 0.02
-    """...and from the straight fast lift out of the bin, m. Looser: the pile is below it,
-    and straightening it would split it into legs that stop in between, which shakes a
-    held wire loose (measured through the hardware interface)."""
+    """How far the tool centre may stray from the straight descent and lift, m."""
     free_step: float = 0.02
     """Joint-space spacing of collision checks on free moves, rad (the wrist moves about
     1 cm per 0.02 rad, covered by ``free_clearance``)."""
@@ -137,8 +139,7 @@ class ArmMotion:
                                       s.cartesian_speed),
                            self._legs(slow, s.slow_speed)]),
             lift=chain([self._legs(slow[::-1], s.slow_speed),
-                        self._legs(self._straight(q_slow, q_lift, "lift", s.lift_straightness),
-                                   s.cartesian_speed)]),
+                        self._legs(self._straight(q_slow, q_lift, "lift"), s.cartesian_speed)]),
             transfer=self._legs(self._free_path([q_lift, q_place], None, "transfer")),
             home=self._legs(self._free_path([q_place, self.q_home], None, "return home")
                             if self.X_place is not None else [self.q_home, self.q_home]),
@@ -181,19 +182,17 @@ class ArmMotion:
         raise PlanningError("collision", f"the {name} move hits the bin or the robot")
 
     def _straight(self, q0: np.ndarray, q1: np.ndarray, name: str,
-                  tolerance: float | None = None, depth: int = 0) -> list[np.ndarray]:
-        """Waypoints from ``q0`` to ``q1`` whose lines keep the tool centre within
-        ``tolerance`` (default: ``straightness``) of the straight segment between their ends
-        (split by IK at the midpoint, at most three times)."""
-        tolerance = self.settings.straightness if tolerance is None else tolerance
+                  depth: int = 0) -> list[np.ndarray]:
+        """Waypoints from ``q0`` to ``q1`` whose lines keep the tool centre on the straight
+        segment between their ends (split by IK at the midpoint, at most three times)."""
         p0, p1 = self.model.tcp_pose(q0).translation(), self.model.tcp_pose(q1).translation()
-        if self._deviation(q0, q1, p0, p1) > tolerance and depth < 3:
+        if self._deviation(q0, q1, p0, p1) > self.settings.straightness and depth < 3:
             X_mid = RigidTransform(self.model.tcp_pose(q0).rotation(), (p0 + p1) / 2)
             q_mid = self.ik.solve(X_mid, (q0 + q1) / 2)
             if q_mid is None:
                 raise PlanningError("unreachable", f"no IK solution along the {name}")
-            return (self._straight(q0, q_mid, name, tolerance, depth + 1)[:-1]
-                    + self._straight(q_mid, q1, name, tolerance, depth + 1))
+            return (self._straight(q0, q_mid, name, depth + 1)[:-1]
+                    + self._straight(q_mid, q1, name, depth + 1))
         if first_violation([q0, q1], self.settings.near_step,
                            lambda q: self._is_clear(q, False)) is not None:
             raise PlanningError("collision", f"the {name} hits the bin or the robot")
@@ -212,12 +211,16 @@ class ArmMotion:
         return worst
 
     def _legs(self, path: Sequence[np.ndarray], tcp_speed: float = np.inf) -> PiecewisePolynomial:
-        """Rest-to-rest legs through the waypoints, in the station's 15 joints."""
+        """One move through the waypoints, in the station's 15 joints: a free move stops at
+        each (its lines are what was checked), a Cartesian one (``tcp_speed`` finite) runs
+        through its nearly collinear waypoints without stopping."""
         s = self.settings
-        legs = []
-        for q0, q1 in itertools.pairwise(path):
-            length = float(np.linalg.norm(self.model.tcp_pose(q1).translation()
-                                          - self.model.tcp_pose(q0).translation()))
-            legs.append(rest_to_rest(self.model.nextage_q(q0), self.model.nextage_q(q1),
-                                     s.velocity_limit, s.acceleration_limit, length, tcp_speed))
-        return chain(legs)
+        nextage = [self.model.nextage_q(q) for q in path]
+        lengths = [float(np.linalg.norm(self.model.tcp_pose(q1).translation()
+                                        - self.model.tcp_pose(q0).translation()))
+                   for q0, q1 in itertools.pairwise(path)]
+        if np.isfinite(tcp_speed):
+            return through_waypoints(nextage, s.velocity_limit, s.acceleration_limit,
+                                     sum(lengths), tcp_speed)
+        return chain([rest_to_rest(q0, q1, s.velocity_limit, s.acceleration_limit)
+                      for q0, q1 in itertools.pairwise(nextage)])
