@@ -2,7 +2,7 @@
 
     python tools/bench_collect.py                       # every built-in part, 2 workers
     python tools/bench_collect.py --parts u_hook --piles 12 --workers 1
-    python tools/bench_collect.py --reference           # also compare with a slow lift
+    python tools/bench_collect.py --reference slow      # also compare with a slow lift
     python tools/bench_collect.py --repeat 3            # label agreement under perturbation
 
 Runs tasks 0..piles-1 of a collection (seed --seed) through the same worker backend as
@@ -14,8 +14,9 @@ Runs tasks 0..piles-1 of a collection (seed --seed) through the same worker back
 - the peak resident memory of any worker;
 - the tangled fraction, the share labelled without a lift, the empty-region skips;
 - the pile depth in layers (``tangle_data.pile_stats``) and the pile's height;
-- with ``--reference``: the agreement of each lift's label with a slow lift of the same
-  candidate on the same pile (0.1 m/s, 0.5 s hold, no early exit);
+- with ``--reference slow``: the agreement of each lift's label with a slow lift of the same
+  candidate on the same pile (0.1 m/s, 0.5 s hold, no early exit, no part locked); with
+  ``--reference unfrozen``, with the default lift locking no part;
 - with ``--repeat K``: the share of lifts whose K perturbed re-runs all agree, and the mean
   agreement with the majority.
 """
@@ -36,8 +37,13 @@ from tangle_drake.tangle_data.settings import CollectSettings, LiftSettings
 from tangle_drake.tangle_data.simulator import TaskResult, data_scenario
 from tangle_drake.tangle_data.workers import start_workers
 
-REFERENCE_LIFT = LiftSettings(speed_m_s=0.1, accel_m_s2=1.0, hold_s=0.5, freeze_beyond_radii=0.0,
-                              early_exit=False)
+REFERENCE_LIFTS = {
+    "slow": LiftSettings(speed_m_s=0.1, accel_m_s2=1.0, hold_s=0.5, freeze_beyond_radii=0.0,
+                         early_exit=False),
+    "unfrozen": LiftSettings(freeze_beyond_radii=0.0),
+}
+"""``--reference``: a slow lift with every shortcut off, or the default lift with no part
+locked (to tell the freezing's effect from the speed's)."""
 
 
 def run_tasks(settings: CollectSettings, scenario_text: str, piles: int,
@@ -92,17 +98,17 @@ def bench_part(part: str, args: argparse.Namespace, scenario_text: str) -> dict:
         row["repeat_majority"] = sum(s["repeat_majority"] for s in stats) / lifts
         row["repeat_lifts"] = lifts
     if args.reference:
-        reference, _ = run_tasks(replace(settings, lift=REFERENCE_LIFT, repeat=1),
-                                 scenario_text, args.piles, args.workers)
+        reference, _ = run_tasks(replace(settings, lift=REFERENCE_LIFTS[args.reference],
+                                         repeat=1), scenario_text, args.piles, args.workers)
         row.update(_agreement(results, reference))
     return row
 
 
-def _agreement(fast: list[TaskResult], slow: list[TaskResult]) -> dict:
+def _agreement(default: list[TaskResult], reference: list[TaskResult]) -> dict:
     """Label agreement of the lifted samples, matched by (task, candidate rank), and the
     disagreements by direction."""
     pairs = []
-    for a, b in zip(fast, slow, strict=True):
+    for a, b in zip(default, reference, strict=True):
         labels_b = dict(zip(b.samples["rank"].tolist(), b.samples["label"].tolist(),
                             strict=True))
         for rank, label, lifted in zip(a.samples["rank"].tolist(), a.samples["label"].tolist(),
@@ -112,8 +118,8 @@ def _agreement(fast: list[TaskResult], slow: list[TaskResult]) -> dict:
     total = len(pairs)
     return {"reference_agreement": sum(a == b for a, b in pairs) / total if total else np.nan,
             "reference_lifts": total,
-            "only_fast_tangled": sum(a > b for a, b in pairs),
-            "only_slow_tangled": sum(a < b for a, b in pairs)}
+            "only_default_tangled": sum(a > b for a, b in pairs),
+            "only_reference_tangled": sum(a < b for a, b in pairs)}
 
 
 def main() -> None:
@@ -125,7 +131,8 @@ def main() -> None:
     parser.add_argument("--parts-per-pile", type=int, default=None)
     parser.add_argument("--lifts-per-pile", type=int, default=None)
     parser.add_argument("--repeat", type=int, default=1)
-    parser.add_argument("--reference", action="store_true")
+    parser.add_argument("--reference", choices=sorted(REFERENCE_LIFTS), default=None,
+                        help="compare every lift's label with this reference lift's")
     args = parser.parse_args()
     scenario_text = default_scenario_text()
     rows = []
@@ -151,9 +158,10 @@ def _format(row: dict) -> str:
         line += (f"  repeat: all agree {100 * row['repeat_all_agree']:.1f} %, majority "
                  f"{100 * row['repeat_majority']:.1f} % ({row['repeat_lifts']} lifts)")
     if "reference_lifts" in row:
-        line += (f"  vs slow lift: {100 * row['reference_agreement']:.1f} % agree "
-                 f"({row['reference_lifts']} lifts; tangled only in the fast lift "
-                 f"{row['only_fast_tangled']}, only in the slow one {row['only_slow_tangled']})")
+        line += (f"  vs reference lift: {100 * row['reference_agreement']:.1f} % agree "
+                 f"({row['reference_lifts']} lifts; tangled only with the default lift "
+                 f"{row['only_default_tangled']}, only with the reference "
+                 f"{row['only_reference_tangled']})")
     return line
 
 
