@@ -171,43 +171,27 @@ def test_camera_images_over_lcm_match_the_simulated_camera(depth_format):
     assert loop.station.GetOutputPort("safety.report").Eval(context).mode is Mode.RUNNING
 
 
-def test_the_pick_diagram_picks_one_part_through_the_hardware_interface():
-    """The unchanged pick diagram, its station built with hardware=True, against the hardware
-    simulator: one whole pick (look, plan, approach, grasp, lift, check, place)."""
-    from tangle_drake.pick.demo import empty_width
-    from tangle_drake.pick.diagram import build_pick_diagram
+def test_the_demo_picks_one_part_through_the_hardware_interface():
+    """``tangle-drake demo --hardware --with-hardware-sim``: the unchanged pick diagram, its
+    station built with hardware=True, against the hardware simulator: one whole pick (look,
+    plan, approach, grasp, lift, check, place)."""
+    from tangle_drake.pick.demo import DemoOptions, empty_width, run_demo
     from tangle_drake.pick.outcome import Outcome
-    from tangle_drake.pick.planner import Mode as PickMode
-    from tangle_drake.pick.planner import PickSettings
-    from tangle_drake.pick.selection import resolve_tangle_choice
-    from tangle_drake.planning.arm_motion import ArmMotion
 
     scenario = load_scenario(diagrams_dir() / "pick_demo.yaml")
     scenario.view_cameras = []
     scenario.pile.parts[0].count = 3
-    settings = PickSettings(max_picks=1, empty_width=empty_width(scenario.pile))
-    choice = resolve_tangle_choice("u_hook", "graspability")
-
-    def pick_diagram(station):
-        return build_pick_diagram(scenario, choice, ArmMotion(scenario.bin), station=station,
-                                  settings=settings).diagram
-
-    loop = HardwareInTheLoop(scenario, pick_diagram)
-    mode = loop.controller_diagram.GetOutputPort("mode")
-    context = loop.station.GetMyContextFromRoot(loop.get_context())
-    fault = loop.station.GetOutputPort("safety.fault")
-    while mode.Eval(loop.get_context()) is not PickMode.DONE:
-        assert loop.time < 30.0, f"no pick after {loop.time:.0f} s"
-        loop.AdvanceTo(loop.time + 0.5)
-        assert fault.Eval(context)[0] == 0, \
-            loop.station.GetOutputPort("safety.report").Eval(context).message
-    (record,) = loop.controller_diagram.GetOutputPort("picks").Eval(loop.get_context())
+    lines = []
+    (record,) = run_demo(DemoOptions(picks=1, scenario=scenario, rule="graspability",
+                                     hardware=True, with_hardware_sim=True), lines.append)
     # Whether the fingers catch a wire is physics; what the interface must deliver is a whole
-    # pick whose outcome the controller read from the gripper's measured width alone (the
-    # hardware station has no simulation-only ports), as in the simulated end-to-end test.
+    # pick (no safety stop) whose outcome the controller read from the gripper's measured
+    # width alone (the hardware station has no simulation-only ports).
     assert record.outcome is not Outcome.FAILED, record.describe()
     assert record.lifted is None
-    assert (record.outcome is Outcome.NONE) == (record.width < settings.empty_width)
+    assert (record.outcome is Outcome.NONE) == (record.width < empty_width(scenario.pile))
+    assert any("over memq://" in line for line in lines), lines
+    assert "parts left in the bin" in lines[-1]
 
 
 def _run_command(argv: list[str]) -> int:

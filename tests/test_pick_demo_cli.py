@@ -25,6 +25,9 @@ def run_demo_command(*argv: str) -> None:
     (["--record", "demo.txt"], "--record must name an .html file"),
     (["--scenario", "no/such.yaml"], "cannot read scenario file"),
     (["--scenario", "pile_only.yaml"], "the station has no 'nextage.state_measured' port"),
+    (["--with-hardware-sim"], "--with-hardware-sim goes with --hardware"),
+    (["--hardware", "--meshcat"], "with --hardware there is none in the controller"),
+    (["--hardware"], "'memq://', which no other process can reach"),
 ])
 def test_bad_arguments_are_refused_with_a_clear_message(argv, message):
     with pytest.raises(TangleDrakeError, match=message):

@@ -74,8 +74,17 @@ class CountingCandidates(LeafSystem):
         value.set_value(list(self.candidates))
 
 
+class FaultWindow(LeafSystem):
+    """A ``safety.fault`` that is 1 between ``start`` and ``end`` (s), else 0."""
+
+    def __init__(self, start: float, end: float) -> None:
+        super().__init__()
+        self.DeclareVectorOutputPort("fault", 1, lambda context, out: out.SetAtIndex(
+            0, float(start <= context.get_time() < end)), {self.time_ticket()})
+
+
 def run(candidates, motion=None, width=0.003, lifted=None, scored=None, picks=2,
-        duration=30.0):
+        duration=30.0, fault=None):
     """Simulate the planner alone; returns (records, modes visited, gripper command on entering
     each mode, source)."""
     motion = motion or FakeMotion()
@@ -90,6 +99,9 @@ def run(candidates, motion=None, width=0.003, lifted=None, scored=None, picks=2,
     if lifted is not None:
         count = builder.AddSystem(ConstantVectorSource(np.array([float(lifted)])))
         builder.Connect(count.get_output_port(), planner.GetInputPort("lifted_count"))
+    if fault is not None:
+        window = builder.AddSystem(FaultWindow(*fault))
+        builder.Connect(window.get_output_port(), planner.GetInputPort("safety.fault"))
     if scored is not None:
         scores = builder.AddSystem(ConstantValueSource(AbstractValue.Make(scored)))
         builder.Connect(scores.get_output_port(), planner.GetInputPort("scored_candidates"))
@@ -130,6 +142,23 @@ def test_the_gripper_opens_for_the_approach_closes_to_zero_and_releases():
     assert widths[Mode.CLOSE] == open_width  # first the arm settles at the bottom
     assert widths[Mode.LIFT] == widths[Mode.TRANSFER] == 0.0
     assert widths[Mode.RELEASE] == open_width
+
+
+def test_a_safety_fault_fails_the_pick_in_progress_and_the_planner_resumes_once_it_clears():
+    # The first pick's approach starts at 0.3 s (after settling); the fault hits during it.
+    records, modes, _, _ = run([candidate(0, 0.9)], lifted=1, picks=2, fault=(0.5, 1.5))
+    assert modes[:4] == [Mode.SETTLE, Mode.PERCEIVE, Mode.APPROACH, Mode.STOPPED]
+    assert modes[4:] == [*PICK_MODES, Mode.DONE]  # a fresh look once the fault cleared
+    first, second = records
+    assert first.outcome is Outcome.FAILED and first.reason == "safety stop during approach"
+    assert second.outcome is Outcome.ONE
+
+
+def test_a_fault_while_idle_records_nothing_and_a_lasting_fault_stays_stopped():
+    records, modes, _, _ = run([candidate(0, 0.9)], lifted=1, picks=1, fault=(0.1, 99.0),
+                               duration=5.0)
+    assert modes == [Mode.SETTLE, Mode.STOPPED]
+    assert records == []
 
 
 def test_fingers_closed_past_the_threshold_mean_an_empty_grasp():

@@ -39,6 +39,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              ".html file")
     parser.add_argument("--diagram", type=Path, default=None,
                         help="also draw the pick diagram to this .svg/.png/.dot file")
+    parser.add_argument("--hardware", action="store_true",
+                        help="run the same pick diagram against the robot's LCM driver "
+                             "interface on the scenario's bus (see docs/hardware.md)")
+    parser.add_argument("--with-hardware-sim", action="store_true",
+                        help="with --hardware: run the hardware simulator in this process, "
+                             "both sides over memq:// (nothing leaves the process)")
     parser.set_defaults(func=run)
 
 
@@ -48,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
     run_demo(DemoOptions(
         picks=args.picks, part=args.part, scenario=args.scenario, seed=args.seed,
         rule=args.rule, model=args.model, meshcat=args.meshcat, record=args.record,
-        diagram=args.diagram))
+        diagram=args.diagram, hardware=args.hardware,
+        with_hardware_sim=args.with_hardware_sim))
     if args.meshcat and sys.stdin.isatty():
         input("Meshcat stays up until you press Enter.")
     return 0

@@ -8,7 +8,6 @@ import math
 import time
 
 from tangle_drake.commands.scene import add_scenario_argument
-from tangle_drake.errors import TangleDrakeError
 
 CHECK_TIMEOUT = 10.0
 """Simulated seconds ``--check`` allows its scripted motion."""
@@ -44,18 +43,12 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _serve(scenario, args: argparse.Namespace) -> int:
-    from tangle_drake.hardware.config import IN_PROCESS_URL
+    from tangle_drake.hardware.config import network_bus_url
     from tangle_drake.hardware.hardware_sim import build_hardware_sim
 
-    bus = scenario.hardware.lcm_bus
-    url = scenario.lcm_buses[bus].lcm_url
-    if url.startswith(IN_PROCESS_URL):
-        raise TangleDrakeError(
-            f"the scenario's LCM bus {bus!r} is {url!r}, which no other process can reach; "
-            f"set lcm_buses.{bus}.lcm_url to the robot network's URL (see docs/hardware.md), "
-            "or use --check to drive the simulator from this process")
+    url = network_bus_url(scenario, "use --check to drive the simulator from this process")
     sim = build_hardware_sim(scenario, seed=args.seed, progress=print)
-    print(f"hardware simulator on {url or 'the default LCM URL'}: pile of "
+    print(f"hardware simulator on {url}: pile of "
           f"{sim.pile.num_in_bin} parts; commands on {scenario.hardware.nextage_command_channel}"
           f" and {scenario.hardware.wsg_command_channel}")
     sim.simulator.set_target_realtime_rate(1.0)

@@ -8,16 +8,34 @@ before anything leaves the process (see ``docs/hardware.md``).
 # No `from __future__ import annotations`: Drake's YAML loader needs real field types.
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from pydrake.lcm import DrakeLcmParams
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.gripper import DEFAULT_GRIPPER
 
+if TYPE_CHECKING:
+    from tangle_drake.scenario import Scenario
+
 IN_PROCESS_URL = "memq://"
 """LCM's in-process transport: messages never leave the process that made the ``DrakeLcm``."""
 
 DEPTH_FORMATS = ("32F", "16U")
+
+
+def network_bus_url(scenario: "Scenario", instead: str) -> str:
+    """The URL of the scenario's hardware bus, refused if no other process can reach it (a
+    controller or simulator on ``memq://`` alone would wait forever); ``instead`` says what to
+    do then."""
+    bus = scenario.hardware.lcm_bus
+    url = scenario.lcm_buses[bus].lcm_url
+    if url.startswith(IN_PROCESS_URL):
+        raise TangleDrakeError(
+            f"the scenario's LCM bus {bus!r} is {url!r}, which no other process can reach; "
+            f"set lcm_buses.{bus}.lcm_url to the robot network's URL (see docs/hardware.md), "
+            f"or {instead}")
+    return url or "the default LCM URL"
 
 
 def default_lcm_buses() -> dict[str, DrakeLcmParams]:

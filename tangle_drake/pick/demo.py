@@ -19,11 +19,13 @@ from pydrake.systems.framework import Context, Diagram
 from tangle_drake.bin_model import inside_bin
 from tangle_drake.commands.diagram import write_graphviz
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.hardware.config import IN_PROCESS_URL, network_bus_url
+from tangle_drake.hardware.loop import HardwareInTheLoop
 from tangle_drake.parts import load_part
 from tangle_drake.pick.diagram import PickDiagram, build_pick_diagram, thinnest_wire
 from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.planner import Mode, PickSettings
-from tangle_drake.pick.selection import resolve_tangle_choice
+from tangle_drake.pick.selection import TangleChoice, resolve_tangle_choice
 from tangle_drake.pile import drop_pile, part_bodies
 from tangle_drake.planning.arm_motion import ArmMotion
 from tangle_drake.scenario import PartCount, PileConfig, Scenario
@@ -56,6 +58,10 @@ class DemoOptions:
     meshcat: bool = False
     record: Path | None = None
     diagram: Path | None = None
+    hardware: bool = False
+    """Pick through the hardware station (the robot's LCM driver messages)."""
+    with_hardware_sim: bool = False
+    """With ``hardware``: run the hardware simulator in this process, over ``memq://``."""
 
 
 def with_part(scenario: Scenario, part: str | None) -> Scenario:
@@ -80,6 +86,12 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
         raise TangleDrakeError(f"--picks must be at least 1, got {options.picks}")
     if options.record is not None and Path(options.record).suffix.lower() != ".html":
         raise TangleDrakeError(f"--record must name an .html file, not {options.record}")
+    if options.with_hardware_sim and not options.hardware:
+        raise TangleDrakeError("--with-hardware-sim goes with --hardware")
+    if options.hardware and (options.meshcat or options.record or options.diagram):
+        raise TangleDrakeError("--meshcat, --record and --diagram show the simulated station; "
+                               "with --hardware there is none in the controller (run "
+                               "`tangle-drake diagram` for the picture)")
     scenario = options.scenario if isinstance(options.scenario, Scenario) else resolve_scenario(
         options.scenario)
     scenario = with_part(scenario, options.part)
@@ -90,6 +102,9 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     if choice.notice:
         say(choice.notice)
     say(f"selection: rule {choice.rule}" + (f", model {choice.model}" if choice.model else ""))
+    settings = PickSettings(max_picks=options.picks, empty_width=empty_width(scenario.pile))
+    if options.hardware:
+        return _run_hardware(options, scenario, choice, settings, say)
 
     meshcat = None
     if options.meshcat or options.record:
@@ -98,7 +113,6 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     start = time.perf_counter()
     station = build_station(scenario, meshcat)
     pile_state = _settled_pile(station, scenario, options.seed, say)
-    settings = PickSettings(max_picks=options.picks, empty_width=empty_width(scenario.pile))
     pick = build_pick_diagram(scenario, choice, ArmMotion(scenario.bin), station=station,
                               settings=settings, seed=options.seed or 0)
     if options.diagram is not None:
@@ -116,15 +130,53 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
         Path(options.record).parent.mkdir(parents=True, exist_ok=True)
         Path(options.record).write_text(meshcat.StaticHtml())
         say(f"wrote {options.record}")
-    left = parts_in_bin(pick, simulator.get_context(), scenario)
+    left = parts_in_bin(station, simulator.get_context(), scenario)
     say(f"{summarize(records)}; {left} of {scenario.pile.total_count} parts left in the bin; "
         f"wall time {time.perf_counter() - start:.0f} s")
     return records
 
 
-def parts_in_bin(pick: PickDiagram, context: Context, scenario: Scenario) -> int:
-    """Simulation only: how many parts lie in the bin now (the released ones lie outside)."""
-    plant = pick.station.GetSubsystemByName(PLANT_NAME)
+def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
+                  settings: PickSettings, say: Callable[[str], None]) -> list[PickRecord]:
+    """The same pick diagram around the hardware station: against the hardware simulator in
+    this process over ``memq://`` (``--with-hardware-sim``), or against the robot's drivers on
+    the scenario's LCM bus, in real time."""
+    start = time.perf_counter()
+    built: list[PickDiagram] = []
+
+    def make(station: Diagram) -> Diagram:
+        built.append(build_pick_diagram(scenario, choice, ArmMotion(scenario.bin),
+                                        station=station, settings=settings,
+                                        seed=options.seed or 0))
+        return built[0].diagram
+
+    if options.with_hardware_sim:
+        loop = HardwareInTheLoop(scenario, make, options.seed, progress=say)
+        say(f"hardware simulator and controller in this process over {IN_PROCESS_URL}; "
+            f"set-up {time.perf_counter() - start:.1f} s; picking {options.picks} part(s)")
+        records = _run(loop, built[0], options.picks, say)
+        left = parts_in_bin(loop.robot.station, loop.robot.simulator.get_context(), scenario)
+        say(f"{summarize(records)}; {left} of {loop.robot.pile.num_in_bin} parts left in the "
+            f"bin; wall time {time.perf_counter() - start:.0f} s")
+        return records
+
+    url = network_bus_url(scenario, "use --with-hardware-sim to run against the hardware "
+                                    "simulator in this process")
+    station = build_station(scenario, hardware=True)
+    simulator = Simulator(make(station))
+    simulator.set_target_realtime_rate(1.0)
+    say(f"waiting for the robot on {url} ...")
+    station.initialize(simulator)
+    say(f"robot connected; picking {options.picks} part(s)")
+    records = _run(simulator, built[0], options.picks, say)
+    say(f"{summarize(records)}; wall time {time.perf_counter() - start:.0f} s")
+    return records
+
+
+def parts_in_bin(station: Diagram, context: Context, scenario: Scenario) -> int:
+    """Simulation only: how many parts lie in the simulated ``station`` 's bin now (the
+    released ones lie outside); ``context`` is its root diagram's."""
+    plant = station.GetSubsystemByName(PLANT_NAME)
     plant_context = plant.GetMyContextFromRoot(context)
     return sum(bool(inside_bin(scenario.bin, body.EvalPoseInWorld(plant_context).translation()))
                for body in part_bodies(plant))
@@ -153,17 +205,23 @@ def _simulator(pick: PickDiagram, plant_state: np.ndarray) -> Simulator:
     return simulator
 
 
-def _run(simulator: Simulator, pick: PickDiagram, picks: int,
+def _run(simulator: Simulator | HardwareInTheLoop, pick: PickDiagram, picks: int,
          say: Callable[[str], None]) -> list[PickRecord]:
-    """Advance until the planner is done (or out of time), reporting each pick as it ends."""
+    """Advance until the planner is done, stopped by the station's safety, or out of time,
+    reporting each pick as it ends."""
     context = simulator.get_context()
     mode_port, picks_port = pick.diagram.GetOutputPort("mode"), pick.diagram.GetOutputPort("picks")
     reported = 0
-    records: list[PickRecord] = []
-    limit = picks * SIM_TIME_PER_PICK
-    while mode_port.Eval(context) is not Mode.DONE:
+    limit = context.get_time() + picks * SIM_TIME_PER_PICK
+    while (mode := mode_port.Eval(context)) is not Mode.DONE:
+        if mode is Mode.STOPPED:
+            report = pick.station.GetOutputPort("safety.report").Eval(
+                pick.station.GetMyContextFromRoot(context))
+            say(f"safety stop: {report.message}; the arm holds its measured pose. Fix the "
+                "cause and run the demo again: it starts from the measured state.")
+            break
         if context.get_time() >= limit:
-            say(f"stopped: {picks} pick(s) not done after {limit:.0f} s of simulated time")
+            say(f"stopped: {picks} pick(s) not done after {picks * SIM_TIME_PER_PICK:.0f} s")
             break
         simulator.AdvanceTo(context.get_time() + 0.5)
         records = picks_port.Eval(context)

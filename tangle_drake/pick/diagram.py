@@ -6,16 +6,18 @@ lift monitor, wired by port name so the same builder serves the hardware station
     nextage.state_measured, gripper.state_measured ------------------------> PickPlanner
     PickPlanner -> nextage.position, gripper.position -> station
     sim.body_poses -> LiftMonitor -> lifted_count -> PickPlanner   (simulation only)
+    safety.fault ----------------------------------------------> PickPlanner   (hardware only)
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from pydrake.geometry import Meshcat
-from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
 from tangle_drake.bin_model import inner_corners
 from tangle_drake.camera import CameraModel
@@ -30,6 +32,12 @@ from tangle_drake.pick.planner import PickPlanner, PickSettings
 from tangle_drake.pick.selection import TangleChoice
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
 from tangle_drake.station import PLANT_NAME, build_station, camera_model
+
+SelectionWiring = Callable[[DiagramBuilder, OutputPort, OutputPort],
+                           tuple[OutputPort, OutputPort]]
+"""Adds a selection of its own to the builder: given the depth image and the graspability
+candidates, returns its ``scored_candidates`` and ``selected_grasp`` ports (as
+``TangleCnnSystem`` has), which the planner then follows."""
 
 
 @dataclass
@@ -87,13 +95,15 @@ def default_graspability_params(scenario: Scenario) -> GraspabilityParams:
 def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion, *,
                        station: Diagram | None = None, settings: PickSettings | None = None,
                        params: GraspabilityParams | None = None, seed: int = 0,
-                       meshcat: Meshcat | None = None) -> PickDiagram:
+                       meshcat: Meshcat | None = None,
+                       selection: SelectionWiring | None = None) -> PickDiagram:
     """Wire the pick diagram around ``station`` (built from ``scenario`` if not given).
 
     ``choice`` says whether a tangle CNN runs (and which rule selects); ``motion`` moves the
     arm (``ArmMotion`` for the Nextage); ``params`` default to
     :func:`default_graspability_params`; ``seed`` seeds the ``random`` rule; ``meshcat`` is
-    passed to a station built here.
+    passed to a station built here. ``selection``, if given, replaces ``choice``'s CNN between
+    perception and the planner (the benchmark switches methods with it).
     """
     station = station or build_station(scenario, meshcat)
     needed = [(motion.measured_port, True), ("gripper.state_measured", True),
@@ -116,7 +126,11 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
     depth = station.GetOutputPort("camera.depth_image")
     builder.Connect(depth, graspability.GetInputPort("depth_image"))
     builder.Connect(graspability.GetOutputPort("candidates"), planner.GetInputPort("candidates"))
-    if choice.model is not None:
+    if selection is not None:
+        scored, selected = selection(builder, depth, graspability.GetOutputPort("candidates"))
+        builder.Connect(scored, planner.GetInputPort("scored_candidates"))
+        builder.Connect(selected, planner.GetInputPort("selected_grasp"))
+    elif choice.model is not None:
         from tangle_drake.tangle_cnn.system import TangleCnnSystem  # imports torch
 
         cnn = builder.AddNamedSystem(
@@ -132,6 +146,9 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
     for port in (motion.command_port, "gripper.position"):
         builder.Connect(planner.GetOutputPort(port), station.GetInputPort(port))
 
+    if station.HasOutputPort("safety.fault"):  # the hardware station's
+        builder.Connect(station.GetOutputPort("safety.fault"),
+                        planner.GetInputPort("safety.fault"))
     monitor = None
     if station.HasOutputPort("sim.body_poses"):
         plant = station.GetSubsystemByName(PLANT_NAME)

@@ -15,6 +15,11 @@ not tried again (it left the pile as it was). After ``max_picks`` picks, or when
 be picked (no candidate, none reachable: the next look would see the same pile), the planner
 is DONE and holds still.
 
+On hardware the station's ``safety.fault`` may stop the robot at any time (stale status, a
+command past a limit): the planner records the pick in progress as failed, STOPPED, and holds
+the measured pose. When the fault clears (the station was reset), it carries on from the
+measured state with a fresh look at the pile, as after a restart.
+
 Everything lives in one abstract state value, updated by a periodic unrestricted event; the
 commands are computed from it and the time, so a plan is played smoothly between events.
 
@@ -29,6 +34,7 @@ port                         dir    value
 ``selected_grasp``           in     optional, with ``scored_candidates``: the rule's choice,
                                     tried first
 ``lifted_count``             in     optional, simulation: parts brought up (``LiftMonitor``)
+``safety.fault``             in     optional, hardware: 1 after the station's safety stop
 ``{motion.command_port}``    out    the manipulator's command (``nextage.position``)
 ``gripper.position``         out    commanded opening, m
 ``mode``                     out    the current :class:`Mode`
@@ -67,6 +73,8 @@ class Mode(enum.Enum):
     TRANSFER = "transfer"
     RELEASE = "release"
     HOME = "home"
+    STOPPED = "stopped"
+    """The station reported a safety stop: the pick in progress was abandoned."""
     DONE = "done"
 
 
@@ -156,6 +164,7 @@ class PickPlanner(LeafSystem):
         self._selected = self.DeclareAbstractInputPort("selected_grasp",
                                                        AbstractValue.Make(None))
         self._lifted = self.DeclareVectorInputPort("lifted_count", 1)
+        self._fault = self.DeclareVectorInputPort("safety.fault", 1)
         self._state = self.DeclareAbstractState(AbstractValue.Make(
             _State(Mode.SETTLE, 0.0, np.zeros(motion.command_size), self._settings.open_width)))
         depends = {self.time_ticket(), self.abstract_state_ticket(self._state)}
@@ -208,6 +217,9 @@ class PickPlanner(LeafSystem):
         t = context.get_time()
         elapsed = t - s.since
         settings = self._settings
+        fault = self._fault.HasValue(context) and self._fault.Eval(context)[0] > 0.5
+        if fault or s.mode is Mode.STOPPED:
+            return self._safety(context, s, fault)
         if s.mode is Mode.SETTLE and elapsed >= settings.settle_time:
             return replace(s, mode=Mode.PERCEIVE, since=t)
         if s.mode is Mode.PERCEIVE:
@@ -239,6 +251,24 @@ class PickPlanner(LeafSystem):
         if mode is Mode.SETTLE:  # back home: the pick is over
             record = replace(s.record, execution_s=t - s.started)
             s = self._finish(replace(s, plan=None, record=None), record, t)
+        return s
+
+    def _safety(self, context: Context, s: _State, fault: bool) -> _State:
+        """Stop on a fault (the pick in progress fails), resume from the measured state once
+        it clears; DONE stays DONE."""
+        t = context.get_time()
+        hold = self._motion.hold_command(self._measured.Eval(context))
+        if fault and s.mode not in (Mode.STOPPED, Mode.DONE):
+            stopped = replace(s, mode=Mode.STOPPED, since=t, hold=hold, trajectory=None,
+                              plan=None, record=None)
+            if s.record is None:
+                return stopped
+            record = replace(s.record, outcome=Outcome.FAILED, execution_s=t - s.started,
+                             reason=f"safety stop during {s.mode.value}")
+            return replace(stopped, picks=(*s.picks, record))
+        if not fault and s.mode is Mode.STOPPED:
+            done = len(s.picks) >= self._settings.max_picks
+            return replace(s, mode=Mode.DONE if done else Mode.SETTLE, since=t, hold=hold)
         return s
 
     def _finish(self, s: _State, record: PickRecord, t: float) -> _State:
