@@ -8,10 +8,9 @@ import pytest
 import torch
 
 from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.crops import DEFAULT_CROP, CropSpec, extract_crop
+from tangle_drake.crops import DEFAULT_CROP, CropSpec, candidate_crops, extract_crop
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.augment import augment_batch, dihedral
-from tangle_drake.tangle_cnn.candidate_crops import candidate_crops
 from tangle_drake.tangle_cnn.metrics import binary_metrics, roc_auc
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet, parameter_count
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION

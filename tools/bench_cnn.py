@@ -30,8 +30,7 @@ import numpy as np
 import torch
 
 from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.crops import DEFAULT_CROP
-from tangle_drake.tangle_cnn.candidate_crops import candidate_crops
+from tangle_drake.crops import DEFAULT_CROP, candidate_crops
 from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
 from tangle_drake.tangle_cnn.model import TangleModel, load_tangle_model
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet, parameter_count

@@ -1,7 +1,7 @@
 """The tangle CNN (paper section III-C): does this grasp lift one and only one part?
 
 A small AlexNet-like classifier of the rotated metric depth crop (``tangle_drake.crops``) that
-outputs P(not tangled) per grasp candidate, its training (``tangle-drake train``), the rules
+outputs P(not tangled) per grasp candidate (its crops: ``crops.candidate_crops``), its training (``tangle-drake train``), the rules
 that combine it with graspability to pick one candidate, and a Drake system that does both.
 
 Modules import torch only where they need it, so ``selection`` stays numpy-only and this
@@ -10,7 +10,6 @@ package's import is cheap:
 - ``network``: the layers; ``normalise``: depth crop -> network input;
 - ``augment``, ``split``, ``metrics``, ``training_data``, ``train``: training;
 - ``checkpoint``: the file format; ``model``: ``load_tangle_model`` and ``TangleModel``;
-- ``candidate_crops``: the crops of all candidates of one image, fast;
 - ``selection``: graspability / cnn / harmonic / random rules;
 - ``system``: ``TangleCnnSystem`` (pydrake); ``onnx_export``: ONNX for other runtimes;
 - ``synthetic``: a separable stand-in dataset for tests and the benchmark.
