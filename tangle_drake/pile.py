@@ -24,8 +24,8 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context, Diagram
 
 from tangle_drake.bin_model import inside_bin
-from tangle_drake.scenario import BinConfig, PileConfig
-from tangle_drake.station import PLANT_NAME, pile_instances
+from tangle_drake.scenario import BinConfig, PileConfig, Scenario
+from tangle_drake.station import PLANT_NAME, hold_robot_still, pile_instances
 
 _CHECK_PERIOD = 0.05  # s of simulated time between rest checks
 _REST_CHECKS = 2  # consecutive checks at rest before the pile counts as settled
@@ -102,6 +102,29 @@ def drop_pile(simulator: Simulator, bin_config: BinConfig, pile_config: PileConf
         to_drop = failed
     report.wall_time = time.perf_counter() - start
     return report
+
+
+class PileDropper:
+    """Drops pile after pile into a station with its robot held still, each from the station's
+    initial state, so a pile depends on its seed alone and not on the piles before it."""
+
+    def __init__(self, station: Diagram, scenario: Scenario) -> None:
+        self.scenario = scenario
+        self.simulator = Simulator(station)
+        context = self.simulator.get_mutable_context()
+        hold_robot_still(station, context)
+        self.simulator.Initialize()
+        self.initial = context.Clone()
+        self.plant: MultibodyPlant = station.GetSubsystemByName(PLANT_NAME)
+
+    def drop(self, seed: int | None = None) -> tuple[np.ndarray, PileReport]:
+        """A settled pile (``seed`` or the scenario's): the plant's positions and velocities,
+        and how the pile went."""
+        self.simulator.get_mutable_context().SetTimeStateAndParametersFrom(self.initial)
+        self.simulator.Initialize()
+        report = drop_pile(self.simulator, self.scenario.bin, self.scenario.pile, seed)
+        context = self.plant.GetMyContextFromRoot(self.simulator.get_context())
+        return self.plant.GetPositionsAndVelocities(context), report
 
 
 class _Placer:

@@ -224,12 +224,16 @@ def _add_camera(builder: DiagramBuilder, scene_graph, scenario: Scenario) -> Non
 def hold_robot_still(station: Diagram, context: Context) -> None:
     """Fix the robot's command inputs to its current pose (arm still, gripper as it is).
 
+    The robot is the Nextage, or the free-floating gripper's gantry
+    (:mod:`tangle_drake.floating_gripper`), whichever the station has.
+
     For jobs that use the station without a controller: making a pile, rendering a scene.
     Also primes the command interpolators so the first step commands no jump.
     """
     plant: MultibodyPlant = station.GetSubsystemByName(PLANT_NAME)
     plant_context = plant.GetMyContextFromRoot(context)
-    for model, width_of in (("nextage", None), ("gripper", _FINGERS_TO_WIDTH[0])):
+    for model, width_of in (("nextage", None), ("gantry", None),
+                            ("gripper", _FINGERS_TO_WIDTH[0])):
         if not plant.HasModelInstanceNamed(model):
             continue
         q = plant.GetPositions(plant_context, plant.GetModelInstanceByName(model))

@@ -34,8 +34,8 @@ from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.tangle_data.collect import default_scenario_text
 from tangle_drake.tangle_data.defaults import default_parts_per_pile
 from tangle_drake.tangle_data.settings import CollectSettings, LiftSettings
-from tangle_drake.tangle_data.simulator import TaskResult, data_scenario
-from tangle_drake.tangle_data.workers import start_workers
+from tangle_drake.tangle_data.simulator import TangleDataSimulator, TaskResult, data_scenario
+from tangle_drake.workers import start_workers
 
 REFERENCE_LIFTS = {
     "slow": LiftSettings(speed_m_s=0.1, accel_m_s2=1.0, hold_s=0.5, freeze_beyond_radii=0.0,
@@ -50,7 +50,7 @@ def run_tasks(settings: CollectSettings, scenario_text: str, piles: int,
               workers: int) -> tuple[list[TaskResult], float]:
     """Tasks 0..piles-1 on ``workers`` workers: results in task order, and the wall time."""
     start = time.perf_counter()
-    backend = start_workers(scenario_text, settings, workers, None)
+    backend = start_workers(TangleDataSimulator, (scenario_text, settings), workers, None)
     try:
         futures = []
         queue = list(range(piles))

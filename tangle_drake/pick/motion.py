@@ -4,7 +4,7 @@ The state machine (``PickPlanner``) decides *when* to move; a ``Motion`` decides
 names the command and measurement ports of its manipulator and plans one whole pick for a
 grasp pose. The Nextage arm's ``ArmMotion`` (IK, collision checks, joint trajectories) is one;
 a free-floating gripper that takes pose commands directly is another
-(``tools/example_floating_gripper.py``).
+(``tangle_drake.floating_gripper``'s ``GantryMotion``).
 """
 
 from __future__ import annotations

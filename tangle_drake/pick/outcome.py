@@ -95,6 +95,17 @@ class PickRecord:
                 f"execution {self.execution_s:.1f} s")
 
 
+def classify_lift(width: float, lifted: int | None, empty_width: float) -> Outcome:
+    """How a pick ended, judged at the top of the lift: fingers closed past ``empty_width``
+    hold nothing (all a robot can tell); else the simulation's count of parts brought up,
+    where there is one (``None``: hardware, ``HELD``), says one or several."""
+    if width < empty_width or lifted == 0:
+        return Outcome.NONE
+    if lifted is None:
+        return Outcome.HELD
+    return Outcome.ONE if lifted == 1 else Outcome.SEVERAL
+
+
 def summarize(records: Sequence[PickRecord]) -> str:
     """One line: how many picks ended how."""
     counts = Counter(record.outcome for record in records)

@@ -57,7 +57,7 @@ from pydrake.trajectories import PiecewisePolynomial
 
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.pick.motion import Motion, PickMotion, PlanningError
-from tangle_drake.pick.outcome import Outcome, PickRecord, Rejection
+from tangle_drake.pick.outcome import Outcome, PickRecord, Rejection, classify_lift
 
 
 class Mode(enum.Enum):
@@ -331,12 +331,7 @@ class PickPlanner(LeafSystem):
         width = float(self._gripper.Eval(context)[0])
         lifted = round(self._lifted.Eval(context)[0]) if self._lifted.HasValue(
             context) else None
-        if width < self._settings.empty_width or lifted == 0:
-            outcome = Outcome.NONE
-        elif lifted is None:
-            outcome = Outcome.HELD
-        else:
-            outcome = Outcome.ONE if lifted == 1 else Outcome.SEVERAL
+        outcome = classify_lift(width, lifted, self._settings.empty_width)
         return replace(record, outcome=outcome, width=width, lifted=lifted)
 
 

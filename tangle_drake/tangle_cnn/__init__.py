@@ -1,8 +1,9 @@
 """The tangle CNN (paper section III-C): does this grasp lift one and only one part?
 
-A small AlexNet-like classifier of the rotated metric depth crop (``tangle_drake.crops``) that
-outputs P(not tangled) per grasp candidate (its crops: ``crops.candidate_crops``), its training (``tangle-drake train``), the rules
-that combine it with graspability to pick one candidate, and a Drake system that does both.
+A small AlexNet-like classifier of the rotated metric depth crop (``tangle_drake.crops``; all
+the candidates of one image: ``crops.candidate_crops``) that outputs P(not tangled) per grasp
+candidate, its training (``tangle-drake train``), the rules that combine it with graspability
+to pick one candidate, and a Drake system that does both.
 
 Modules import torch only where they need it, so ``selection`` stays numpy-only and this
 package's import is cheap:

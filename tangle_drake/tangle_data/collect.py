@@ -23,9 +23,9 @@ from tangle_drake.scenario import Scenario
 from tangle_drake.station import camera_model
 from tangle_drake.tangle_data.progress import CollectProgress
 from tangle_drake.tangle_data.settings import CollectSettings
-from tangle_drake.tangle_data.simulator import TaskResult, data_scenario
+from tangle_drake.tangle_data.simulator import TangleDataSimulator, TaskResult, data_scenario
 from tangle_drake.tangle_data.store import DatasetStore
-from tangle_drake.tangle_data.workers import start_workers
+from tangle_drake.workers import start_workers
 
 DATA_SCENARIO = "tangle_data.yaml"
 
@@ -90,7 +90,7 @@ def _run(store: DatasetStore, settings: CollectSettings, samples: int, workers: 
          show_progress: bool | None) -> CollectionResult:
     if store.totals["samples"] >= samples:
         return CollectionResult(store.directory, store.counts(), 0, False, 0.0)
-    backend = start_workers(scenario_text, settings, workers, ray_address)
+    backend = start_workers(TangleDataSimulator, (scenario_text, settings), workers, ray_address)
     progress = CollectProgress(name, samples, store.counts(), backend.capacity,
                                show_progress)
     pending: dict[Future, int] = {}

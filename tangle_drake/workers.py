@@ -1,9 +1,11 @@
 """Where tasks run: in this process, in local worker processes, or on a Ray cluster.
 
-Each backend hands out ``concurrent.futures.Future`` objects, so the driver loop in
-:mod:`.collect` is the same for all three. Every worker builds its station once and reuses
-it for all its tasks. Workers only compute: they return each task's samples to the driver,
-which alone writes the dataset.
+Shared by ``collect`` and ``bench``. A backend is made from a worker factory and its
+arguments (both picklable: a module-level class or function, plain data): each worker calls
+``factory(*args)`` once, building its station, and reuses the result's ``run_task(task)`` for
+every task it gets. Each backend hands out ``concurrent.futures.Future`` objects, so a
+driver's loop is the same for all three. Workers only compute: they return each task's
+result to the driver, which alone writes to disk.
 
 Local processes use the ``spawn`` start method (Drake and VTK are not fork-safe), ignore
 Ctrl-C (the driver stops them), and exit on their own if the driver dies (``kill -9``).
@@ -16,26 +18,36 @@ import os
 import signal
 import threading
 import time
+from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
+from typing import Any, Protocol
 
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.tangle_data.settings import CollectSettings
-from tangle_drake.tangle_data.simulator import TangleDataSimulator, TaskResult
 
-_WORKER: TangleDataSimulator | None = None
+
+class Worker(Protocol):
+    """What a factory makes: something that runs one task at a time."""
+
+    def run_task(self, task: Any) -> Any:
+        """The task's result (picklable)."""
+
+
+WorkerFactory = Callable[..., Worker]
+
+_WORKER: Worker | None = None
 _ORPHAN_CHECK_S = 1.0
 
 
 class InlineWorker:
     """Runs each task in this process when it is submitted (``--workers 1``)."""
 
-    def __init__(self, scenario_text: str, settings: CollectSettings) -> None:
-        self.simulator = TangleDataSimulator(scenario_text, settings)
+    def __init__(self, factory: WorkerFactory, args: Sequence[Any]) -> None:
+        self.worker = factory(*args)
         self.capacity = 1
 
-    def submit(self, task: int) -> Future:
+    def submit(self, task: Any) -> Future:
         future: Future = Future()
-        future.set_result(self.simulator.run_task(task))
+        future.set_result(self.worker.run_task(task))
         return future
 
     def close(self) -> None:
@@ -43,15 +55,15 @@ class InlineWorker:
 
 
 class ProcessWorkers:
-    """``count`` local worker processes (spawned), one station each."""
+    """``count`` local worker processes (spawned), one worker each."""
 
-    def __init__(self, scenario_text: str, settings: CollectSettings, count: int) -> None:
+    def __init__(self, factory: WorkerFactory, args: Sequence[Any], count: int) -> None:
         self.capacity = count
         self.pool = ProcessPoolExecutor(
             max_workers=count, mp_context=multiprocessing.get_context("spawn"),
-            initializer=_init_process, initargs=(scenario_text, settings, os.getpid()))
+            initializer=_init_process, initargs=(factory, tuple(args), os.getpid()))
 
-    def submit(self, task: int) -> Future:
+    def submit(self, task: Any) -> Future:
         return self.pool.submit(_run_in_process, task)
 
     def close(self) -> None:
@@ -62,11 +74,11 @@ class ProcessWorkers:
             child.join()
 
 
-def _init_process(scenario_text: str, settings: CollectSettings, driver_pid: int) -> None:
+def _init_process(factory: WorkerFactory, args: tuple, driver_pid: int) -> None:
     global _WORKER
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     threading.Thread(target=_exit_when_orphaned, args=(driver_pid,), daemon=True).start()
-    _WORKER = TangleDataSimulator(scenario_text, settings)
+    _WORKER = factory(*args)
 
 
 def _exit_when_orphaned(driver_pid: int) -> None:
@@ -75,7 +87,7 @@ def _exit_when_orphaned(driver_pid: int) -> None:
     os._exit(1)
 
 
-def _run_in_process(task: int) -> TaskResult:
+def _run_in_process(task: Any) -> Any:
     assert _WORKER is not None, "worker process was not initialised"
     return _WORKER.run_task(task)
 
@@ -83,7 +95,7 @@ def _run_in_process(task: int) -> TaskResult:
 class RayWorkers:
     """``count`` Ray actors on the cluster at ``address`` (``auto`` = the local cluster)."""
 
-    def __init__(self, scenario_text: str, settings: CollectSettings, count: int | None,
+    def __init__(self, factory: WorkerFactory, args: Sequence[Any], count: int | None,
                  address: str) -> None:
         try:
             import ray
@@ -100,11 +112,11 @@ class RayWorkers:
         cpus = int(ray.cluster_resources().get("CPU", 1))
         self.capacity = count or cpus
         actor = ray.remote(num_cpus=1)(_RayWorker)
-        self.actors = [actor.remote(scenario_text, settings) for _ in range(self.capacity)]
+        self.actors = [actor.remote(factory, tuple(args)) for _ in range(self.capacity)]
         self.idle = list(self.actors)
         self.busy: dict[Future, object] = {}
 
-    def submit(self, task: int) -> Future:
+    def submit(self, task: Any) -> Future:
         for done in [future for future in self.busy if future.done()]:
             self.idle.append(self.busy.pop(done))
         actor = self.idle.pop()
@@ -118,21 +130,25 @@ class RayWorkers:
 
 
 class _RayWorker:
-    """A Ray actor holding one station (wrapped with ``ray.remote`` lazily)."""
+    """A Ray actor holding one worker (wrapped with ``ray.remote`` lazily)."""
 
-    def __init__(self, scenario_text: str, settings: CollectSettings) -> None:
-        self.simulator = TangleDataSimulator(scenario_text, settings)
+    def __init__(self, factory: WorkerFactory, args: tuple) -> None:
+        self.worker = factory(*args)
 
-    def run_task(self, task: int) -> TaskResult:
-        return self.simulator.run_task(task)
+    def run_task(self, task: Any) -> Any:
+        return self.worker.run_task(task)
 
 
-def start_workers(scenario_text: str, settings: CollectSettings, workers: int | None,
-                  ray_address: str | None) -> InlineWorker | ProcessWorkers | RayWorkers:
-    """The backend for ``--workers`` / ``--ray``."""
+Backend = InlineWorker | ProcessWorkers | RayWorkers
+
+
+def start_workers(factory: WorkerFactory, args: Sequence[Any], workers: int | None,
+                  ray_address: str | None) -> Backend:
+    """The backend for ``--workers`` / ``--ray``: ``workers`` processes or actors (default:
+    one per CPU core, or the cluster's CPUs), each running ``factory(*args)``'s tasks."""
     if ray_address is not None:
-        return RayWorkers(scenario_text, settings, workers, ray_address)
+        return RayWorkers(factory, args, workers, ray_address)
     count = workers or os.cpu_count() or 1
     if count == 1:
-        return InlineWorker(scenario_text, settings)
-    return ProcessWorkers(scenario_text, settings, count)
+        return InlineWorker(factory, args)
+    return ProcessWorkers(factory, args, count)

@@ -1,0 +1,181 @@
+"""The benchmark's methods: how each picks a candidate, and the system that switches them.
+
+=================== ========================================================================
+method              the candidate tried first
+=================== ========================================================================
+``random``          one drawn uniformly among graspability's top 5 (seeded per trial): the
+                    baseline that knows nothing but where a grasp is possible
+``graspability``    the best graspability index (Domae et al. 2014), no CNN
+``cnn``             the highest P(not tangled) from the part's tangle CNN
+``harmonic``        the paper's harmonic mean of the two, with the part's tangle CNN
+``model:PATH``      the harmonic mean with the checkpoint at PATH (any part of the run)
+=================== ========================================================================
+
+``cnn`` and ``harmonic`` use the shipped model ``tangle_drake/trained/<part>.pt``. If the
+tried candidate cannot be reached the planner goes on down the method's order (graspability's
+after a random draw). One pick diagram serves every method: :class:`MethodSelector` sits
+between perception and the planner and follows the method named on its ``method`` input, so a
+trial restores one settled pile and runs each method on it in turn.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import zlib
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem, OutputPort
+
+from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.pick.selection import trained_model_path
+
+DEFAULT_METHODS = ("random", "graspability", "cnn", "harmonic")
+RANDOM_TOP_K = 5
+"""The ``random`` method draws among this many of graspability's best candidates."""
+MODEL_PREFIX = "model:"
+_RULES = {"random": "random", "graspability": "graspability", "cnn": "cnn",
+          "harmonic": "harmonic"}
+
+
+@dataclass(frozen=True)
+class Method:
+    """One way of choosing a candidate: a selection rule, and the checkpoint it needs."""
+
+    name: str
+    rule: str
+    model: Path | None = None
+    """The user's checkpoint (``model:PATH``); ``None``: the part's shipped model, if the
+    rule needs one."""
+
+    @property
+    def needs_model(self) -> bool:
+        return self.rule in ("cnn", "harmonic")
+
+    def model_for(self, part: str) -> Path:
+        """The checkpoint this method uses on ``part`` (which may not exist)."""
+        return self.model if self.model is not None else trained_model_path(part)
+
+
+def parse_method(text: str) -> Method:
+    """``random``, ``graspability``, ``cnn``, ``harmonic`` or ``model:PATH``."""
+    if text.startswith(MODEL_PREFIX):
+        path = Path(text[len(MODEL_PREFIX):]).expanduser()
+        if not path.is_file():
+            raise TangleDrakeError(f"method {text!r}: model file not found: {path}")
+        return Method(f"{MODEL_PREFIX}{path}", "harmonic", path.resolve())
+    if text not in _RULES:
+        raise TangleDrakeError(f"unknown method {text!r}; choose from "
+                               f"{', '.join(DEFAULT_METHODS)} or model:PATH")
+    return Method(text, _RULES[text])
+
+
+def file_digest(path: Path) -> str:
+    """SHA-256 of a file, so a run's record names its models and meshes by content."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+class MethodRun(NamedTuple):
+    """The value of :class:`MethodSelector`'s ``method`` input: which method, which seed."""
+
+    name: str
+    seed: int
+
+
+class _Scored(NamedTuple):
+    """A ``ScoredCandidate`` without a CNN (the planner reads its three fields)."""
+
+    candidate: Any
+    p_not_tangled: float | None
+    score: float
+
+
+class MethodSelector(LeafSystem):
+    """Orders the candidates as the method on the ``method`` input says.
+
+    Inputs: ``candidates`` (graspability's, best first), ``method`` (a :class:`MethodRun`),
+    and for each CNN method ``{name}.scored_candidates`` and ``{name}.selected_grasp`` (from
+    its ``TangleCnnSystem``). Outputs ``scored_candidates`` and ``selected_grasp`` as a
+    ``TangleCnnSystem`` has them; only the active method's inputs are evaluated, so the CNN
+    runs for the CNN methods only.
+    """
+
+    def __init__(self, cnn_methods: Sequence[str]) -> None:
+        super().__init__()
+        self._candidates = self.DeclareAbstractInputPort("candidates", AbstractValue.Make([]))
+        self._method = self.DeclareAbstractInputPort(
+            "method", AbstractValue.Make(MethodRun("graspability", 0)))
+        self._cnn = {name: (self.DeclareAbstractInputPort(f"{name}.scored_candidates",
+                                                          AbstractValue.Make([])),
+                            self.DeclareAbstractInputPort(f"{name}.selected_grasp",
+                                                          AbstractValue.Make(None)))
+                     for name in cnn_methods}
+        self.DeclareAbstractOutputPort("scored_candidates", lambda: AbstractValue.Make([]),
+                                       self._calc_scored)
+        self.DeclareAbstractOutputPort("selected_grasp", lambda: AbstractValue.Make(None),
+                                       self._calc_selected)
+
+    def _calc_scored(self, context: Context, value: AbstractValue) -> None:
+        method = self._method.Eval(context)
+        if method.name in self._cnn:
+            value.set_value(list(self._cnn[method.name][0].Eval(context)))
+        else:
+            value.set_value([_Scored(c, None, float(c.score))
+                             for c in self._candidates.Eval(context)])
+
+    def _calc_selected(self, context: Context, value: AbstractValue) -> None:
+        method = self._method.Eval(context)
+        if method.name in self._cnn:
+            value.set_value(self._cnn[method.name][1].Eval(context))
+        elif method.name == "random":
+            value.set_value(random_top_k(list(self._candidates.Eval(context)), method.seed))
+        else:
+            value.set_value(None)
+
+
+def random_top_k(candidates: list[Any], seed: int, k: int = RANDOM_TOP_K) -> Any:
+    """One of the first ``k`` candidates, drawn from ``seed`` and the candidates' poses (the
+    same draw however often it is asked for); ``None`` without candidates."""
+    if not candidates:
+        return None
+    poses = np.array([(c.u, c.v, c.angle_deg) for c in candidates[:k]], dtype=np.float64)
+    rng = np.random.default_rng((seed, zlib.crc32(poses.tobytes())))
+    return candidates[int(rng.integers(len(poses)))]
+
+
+def selection_wiring(methods: Sequence[Method], part: str, intrinsics: CameraIntrinsics):
+    """A ``build_pick_diagram`` selection: a ``TangleCnnSystem`` per CNN method (models
+    loaded once each) into a :class:`MethodSelector`, whose ``method`` input is exported as
+    ``method``."""
+
+    def wire(builder: DiagramBuilder, depth: OutputPort,
+             candidates: OutputPort) -> tuple[OutputPort, OutputPort]:
+        cnn_methods = [m for m in methods if m.needs_model]
+        selector = builder.AddNamedSystem("method_selector",
+                                          MethodSelector([m.name for m in cnn_methods]))
+        builder.Connect(candidates, selector.GetInputPort("candidates"))
+        builder.ExportInput(selector.GetInputPort("method"), "method")
+        if cnn_methods:
+            from tangle_drake.tangle_cnn.model import load_tangle_model  # imports torch
+            from tangle_drake.tangle_cnn.system import TangleCnnSystem
+
+            models: dict[Path, Any] = {}
+            for method in cnn_methods:
+                path = method.model_for(part)
+                model = models.setdefault(path, load_tangle_model(path))
+                cnn = builder.AddNamedSystem(f"tangle_cnn ({method.name})",
+                                             TangleCnnSystem(model, intrinsics, method.rule))
+                builder.Connect(depth, cnn.GetInputPort("depth_image"))
+                builder.Connect(candidates, cnn.GetInputPort("candidates"))
+                for port in ("scored_candidates", "selected_grasp"):
+                    builder.Connect(cnn.GetOutputPort(port),
+                                    selector.GetInputPort(f"{method.name}.{port}"))
+        return selector.GetOutputPort("scored_candidates"), selector.GetOutputPort(
+            "selected_grasp")
+
+    return wire

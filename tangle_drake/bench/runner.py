@@ -1,0 +1,215 @@
+"""Drive a benchmark: check the arguments, resume the results, farm trials out, report.
+
+Trials are handed out part by part, lowest unfinished index first, to local processes or Ray
+actors (:mod:`tangle_drake.workers`); each finished trial is appended to ``results.jsonl`` at
+once, so Ctrl-C or a kill loses only the trials in flight, and running the same command again
+redoes just those. The report is written from whatever is on disk, interrupted or not.
+"""
+
+from __future__ import annotations
+
+import datetime
+import hashlib
+import os
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, wait
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from tqdm import tqdm
+
+from tangle_drake import __version__
+from tangle_drake.bench.methods import DEFAULT_METHODS, Method, file_digest, parse_method
+from tangle_drake.bench.report import summarize_run, write_report
+from tangle_drake.bench.results import ResultStore
+from tangle_drake.bench.trials import MODES, BenchConfig, PartSpec, TrialWorker
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.parts import BUILTIN_PARTS, load_part
+from tangle_drake.scenario import parse_scenario
+from tangle_drake.scenario_files import scenario_path
+from tangle_drake.workers import start_workers
+
+DEFAULT_TRIALS = 50
+DEFAULT_OUT = Path("results/bench")
+QUICK_PARTS = ("u_hook",)
+QUICK_METHODS = ("random", "graspability")
+QUICK_TRIALS = 2
+QUICK_PILE_SIZE = 6
+"""``--quick``: one part, two methods, two trials, small piles (CI runs it end to end)."""
+
+
+@dataclass(frozen=True)
+class BenchOptions:
+    """What ``tangle-drake bench`` was asked for (``None``: the default, or the quick one)."""
+
+    methods: Sequence[str] | None = None
+    parts: Sequence[str] | None = None
+    mesh_scale: float = 1.0
+    trials: int | None = None
+    workers: int | None = None
+    ray: str | None = None
+    out: Path = DEFAULT_OUT
+    mode: str = "floating"
+    seed: int = 0
+    scenario: str | Path | None = None
+    quick: bool = False
+    show_progress: bool | None = None
+    command: str = "tangle-drake bench"
+    """The command line, written into the report."""
+
+
+@dataclass
+class BenchOutcome:
+    directory: Path
+    summary: dict
+    files: list[Path]
+    new_trials: int
+    interrupted: bool
+    notices: list[str] = field(default_factory=list)
+
+
+def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
+    """The run's configuration and trial count, and notices (methods left out for want of a
+    model); raises ``TangleDrakeError`` for anything that cannot run."""
+    trials = options.trials if options.trials is not None else (
+        QUICK_TRIALS if options.quick else DEFAULT_TRIALS)
+    if trials < 1:
+        raise TangleDrakeError(f"--trials must be at least 1, got {trials}")
+    if options.workers is not None and options.workers < 1:
+        raise TangleDrakeError(f"--workers must be at least 1, got {options.workers}")
+    if options.mode not in MODES:
+        raise TangleDrakeError(f"unknown --mode {options.mode!r}; choose {' or '.join(MODES)}")
+    parts = []
+    for part in options.parts or (QUICK_PARTS if options.quick else BUILTIN_PARTS):
+        scale = 1.0 if part in BUILTIN_PARTS else options.mesh_scale
+        parts.append(PartSpec(part, load_part(part, mesh_scale=scale).name, scale))
+    _unique([p.name for p in parts], "part")
+    explicit = options.methods is not None
+    methods = [parse_method(m) for m in
+               options.methods or (QUICK_METHODS if options.quick else DEFAULT_METHODS)]
+    _unique([m.name for m in methods], "method")
+    notices = []
+    per_part: dict[str, tuple[Method, ...]] = {}
+    for spec in parts:
+        missing = [m for m in methods if m.needs_model and not m.model_for(spec.name).is_file()]
+        if missing and explicit:
+            raise TangleDrakeError(
+                f"method {missing[0].name!r} needs a tangle model for part {spec.name!r}, and "
+                f"{missing[0].model_for(spec.name)} does not exist: train one (`tangle-drake "
+                "collect`, `tangle-drake train`) and install it there, or pass model:PATH")
+        if missing:
+            notices.append(f"notice: no trained tangle model for part {spec.name!r} "
+                           f"({missing[0].model_for(spec.name)}): methods "
+                           f"{', '.join(m.name for m in missing)} skipped on it")
+        per_part[spec.name] = tuple(m for m in methods if m not in missing)
+    path = scenario_path(options.scenario)
+    try:
+        text = path.read_text()
+    except OSError as error:
+        raise TangleDrakeError(f"cannot read scenario file {path}: {error.strerror}") from error
+    parse_scenario(text, source=str(path))  # a clear error now, not in every worker
+    config = BenchConfig(text, tuple(parts), per_part, options.mode, options.seed,
+                         QUICK_PILE_SIZE if options.quick else None)
+    return config, trials, notices
+
+
+def _unique(names: list[str], what: str) -> None:
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:
+        raise TangleDrakeError(f"{what} {repeated[0]!r} is given twice")
+
+
+def identity(config: BenchConfig) -> dict:
+    """What ``bench.json`` binds the results to (all but the trial count): models and meshes
+    by content, so changing one is a new run."""
+    return {
+        "format": 1, "mode": config.mode, "seed": config.seed, "pile_size": config.pile_size,
+        "scenario_sha256": hashlib.sha256(config.scenario_text.encode()).hexdigest(),
+        "parts": [{"name": p.name, "part": p.part, "mesh_scale": p.mesh_scale,
+                   "sha256": None if p.part in BUILTIN_PARTS else file_digest(Path(p.part))}
+                  for p in config.parts],
+        "methods": {part: [{"name": m.name, "rule": m.rule,
+                            "model_sha256": file_digest(m.model_for(part))
+                            if m.needs_model else None} for m in methods]
+                    for part, methods in config.methods.items()},
+    }
+
+
+def run_bench(options: BenchOptions, say: Callable[[str], None] = print) -> BenchOutcome:
+    """Run (or resume) the benchmark and write its report into ``options.out``."""
+    config, trials, notices = plan(options)
+    for notice in notices:
+        say(notice)
+    run_identity = identity(config)
+    store = ResultStore(Path(options.out), run_identity)
+    for notice in store.notices:
+        say(notice)
+    todo = [(i, t) for i, spec in enumerate(config.parts) for t in range(trials)
+            if (spec.name, t) not in store.trials]
+    total = len(config.parts) * trials
+    say(f"benchmark: {len(config.parts)} part(s) x {trials} trial(s), {options.mode} mode, "
+        f"into {store.directory}; {total - len(todo)} trial(s) done before, {len(todo)} to run")
+    start = time.perf_counter()
+    interrupted, workers, new = _run_trials(config, store, todo, total, options)
+    names = [spec.name for spec in config.parts]
+    done = [store.trials[(name, t)] for name in names for t in range(trials)
+            if (name, t) in store.trials]
+    if len(done) < total:
+        notices.append(f"{total - len(done)} of {total} trials not run yet: run the same "
+                       "command again to finish")
+    methods = list(dict.fromkeys(m.name for ms in config.methods.values() for m in ms))
+    summary = summarize_run(done, names, methods, {
+        "command": options.command, "mode": options.mode, "made_by": f"tangle_drake "
+        f"{__version__}", "date": datetime.date.today().isoformat(), "workers": workers,
+        "elapsed_s": time.perf_counter() - start, "trials_per_part": trials,
+        "config": run_identity, "notes": notices})
+    files = write_report(store.directory, done, summary, names, methods)
+    return BenchOutcome(store.directory, summary, files, new, interrupted, notices)
+
+
+def _run_trials(config: BenchConfig, store: ResultStore, todo: list[tuple[int, int]],
+                total: int, options: BenchOptions) -> tuple[bool, int, int]:
+    """Run ``todo``, adding each result to ``store``; (interrupted, workers used, trials
+    finished)."""
+    if not todo:
+        return False, 0, 0
+    count = options.workers or (None if options.ray else os.cpu_count() or 1)
+    if count is not None:
+        count = min(count, len(todo))
+    backend = start_workers(TrialWorker, (config,), count, options.ray)
+    progress = tqdm(total=total, initial=total - len(todo), unit="trial", desc="bench",
+                    dynamic_ncols=True,
+                    disable=None if options.show_progress is None else not options.show_progress)
+    pending: dict[Future, tuple[int, int]] = {}
+    queue = iter(todo)
+    successes = picks = new = 0
+    interrupted = False
+    try:
+        while True:
+            while len(pending) < backend.capacity and (task := next(queue, None)) is not None:
+                pending[backend.submit(task)] = task
+            if not pending:
+                break
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                task = pending.pop(future)
+                try:
+                    result = future.result()
+                except RuntimeError as error:  # Drake gave up: say how to reproduce it
+                    spec = config.parts[task[0]]
+                    raise TangleDrakeError(f"trial {task[1]} of {spec.name} (seed "
+                                           f"{config.seed}) failed: {error}") from error
+                store.add(result)
+                new += 1
+                picks += len(result["picks"])
+                successes += sum(p["result"] == "success" for p in result["picks"])
+                progress.update(1)
+                progress.set_postfix_str(f"success {100 * successes / max(picks, 1):.0f}% "
+                                         f"of {picks} new picks")
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        backend.close()
+        progress.close()
+    return interrupted, backend.capacity, new

@@ -1,0 +1,232 @@
+"""One trial: a fresh settled pile of one part, and one pick per method on that same pile.
+
+A trial is (part, trial index); its pile seed derives from (run seed, part, index) alone, so
+every method sees the same piles (the comparison is paired), whichever worker runs the trial
+and whenever (a resumed run redoes exactly the missing trials). The pile is dropped once in a
+bare copy of the station; its settled plant state is restored into the pick diagram before
+each method's pick. The worker (:class:`TrialWorker`) builds a part's station and pick diagram
+once and reuses them for every trial of that part.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+import zlib
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+from pydrake.systems.analysis import Simulator
+
+from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
+from tangle_drake.floating_gripper import GantryMotion, build_floating_station
+from tangle_drake.pick.demo import SIM_TIME_PER_PICK, empty_width
+from tangle_drake.pick.diagram import build_pick_diagram
+from tangle_drake.pick.outcome import Outcome, PickRecord
+from tangle_drake.pick.planner import Mode, PickSettings
+from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
+from tangle_drake.pile import PileDropper, part_bodies
+from tangle_drake.scenario import PartCount, Scenario, parse_scenario
+from tangle_drake.station import PLANT_NAME, build_station, camera_model
+
+MODES = ("floating", "arm")
+RESULTS = ("success", "tangled", "empty", "failure")
+"""A pick's result: exactly one part came up, several, none, or nothing was attempted."""
+FAILURES = ("no candidate", "unreachable", "collision", "timeout", "other")
+"""Why a pick failed: no grasp candidate, none the robot could reach or reach without a
+collision, or the pick did not finish within the simulated time allowed."""
+
+FLOATING_SIM_LIMIT = 20.0
+"""Simulated seconds a floating-gripper pick may take (one takes ~5 s)."""
+_POLL = 0.05
+"""Simulated seconds between checks whether the pick is over, s."""
+_UNTOUCHED = (Mode.SETTLE, Mode.PERCEIVE, Mode.APPROACH)
+"""Modes in which the robot does not reach into the bin: the settled pile stays locked
+(:meth:`TrialWorker._pick`)."""
+_PILE, _RANDOM = 0, 1
+
+
+@dataclass(frozen=True)
+class PartSpec:
+    """A part of the run: a built-in name or a mesh file, and its scale."""
+
+    part: str
+    name: str
+    """The built-in name or the mesh file's stem: the part's name in results and seeds."""
+    mesh_scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class BenchConfig:
+    """Everything a worker needs to run any trial of the run (picklable)."""
+
+    scenario_text: str
+    parts: tuple[PartSpec, ...]
+    methods: dict[str, tuple[Method, ...]]
+    """The methods run on each part, by part name (a default method whose model a part
+    lacks is left out there)."""
+    mode: str = "floating"
+    seed: int = 0
+    pile_size: int | None = None
+    """Parts per pile; ``None``: the scenario's count."""
+
+
+def _stream(seed: int, part: str, trial: int, purpose: int) -> np.random.SeedSequence:
+    return np.random.SeedSequence([seed, zlib.crc32(part.encode()), trial, purpose])
+
+
+def pile_seed(seed: int, part: str, trial: int) -> int:
+    """The pile seed of trial ``trial`` of ``part``: the same for every method."""
+    return int(_stream(seed, part, trial, _PILE).generate_state(1, np.uint32)[0])
+
+
+def method_seed(seed: int, part: str, trial: int) -> int:
+    """The seed of the trial's random choices (the ``random`` method's draw)."""
+    return int(_stream(seed, part, trial, _RANDOM).generate_state(1, np.uint32)[0])
+
+
+def part_scenario(config: BenchConfig, spec: PartSpec) -> Scenario:
+    """The run's scenario with its pile made of ``spec`` only."""
+    scenario = parse_scenario(config.scenario_text, source="the benchmark scenario")
+    count = config.pile_size or scenario.pile.total_count
+    return replace(scenario, pile=replace(scenario.pile, parts=[
+        PartCount(spec.part, count, spec.mesh_scale)]))
+
+
+def classify(record: PickRecord | None) -> tuple[str, str | None]:
+    """A pick's result (one of :data:`RESULTS`) and, for a failure, why (:data:`FAILURES`);
+    ``None`` is a pick that did not finish in time."""
+    if record is None:
+        return "failure", "timeout"
+    result = {Outcome.ONE: "success", Outcome.SEVERAL: "tangled",
+              Outcome.NONE: "empty"}.get(record.outcome)
+    if result is not None:
+        return result, None
+    reason = record.reason or ""
+    for mode in ("no grasp candidate", "unreachable", "collision"):
+        if mode in reason:
+            return "failure", "no candidate" if mode == "no grasp candidate" else mode
+    return "failure", "other"
+
+
+@dataclass
+class _Rig:
+    """A part's pile dropper and pick diagram, built once per worker."""
+
+    dropper: PileDropper
+    pick: Any
+    simulator: Simulator
+    initial: Any
+    sim_limit: float
+    update_period: float
+    """The planner's: while the pile is locked, the driver looks at every update."""
+    methods: dict[str, Method] = field(default_factory=dict)
+
+
+class TrialWorker:
+    """Runs trials (``(part index, trial index)``) for a :class:`BenchConfig`; keeps the
+    last part's station, as trials come part by part."""
+
+    def __init__(self, config: BenchConfig) -> None:
+        self.config = config
+        self._rig: tuple[str, _Rig] | None = None
+
+    def run_task(self, task: tuple[int, int]) -> dict:
+        """One trial's result: the pile, and one pick per method (see ``results``)."""
+        part_index, trial = task
+        spec = self.config.parts[part_index]
+        start, cpu = time.perf_counter(), time.process_time()
+        rig = self._rig_for(spec)
+        seed = pile_seed(self.config.seed, spec.name, trial)
+        drop_start, drop_cpu = time.perf_counter(), time.process_time()
+        state, report = rig.dropper.drop(seed)
+        pile = {"seed": seed, "parts": report.num_parts, "in_bin": report.num_in_bin,
+                "settled": report.settled, "settle_s": round(report.settle_time, 3),
+                "digest": hashlib.sha256(state.tobytes()).hexdigest()[:16],
+                "wall_s": time.perf_counter() - drop_start,
+                "cpu_s": time.process_time() - drop_cpu}
+        random_seed = method_seed(self.config.seed, spec.name, trial)
+        picks = [self._pick(rig, state, MethodRun(name, random_seed)) for name in rig.methods]
+        return {"part": spec.name, "trial": trial, "pile": pile, "picks": picks,
+                "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
+
+    def _rig_for(self, spec: PartSpec) -> _Rig:
+        if self._rig is None or self._rig[0] != spec.name:
+            self._rig = None  # free the last part's diagrams first
+            self._rig = (spec.name, self._build(spec))
+        return self._rig[1]
+
+    def _build(self, spec: PartSpec) -> _Rig:
+        scenario = part_scenario(self.config, spec)
+        methods = self.config.methods[spec.name]
+        floating = self.config.mode == "floating"
+        build = build_floating_station if floating else build_station
+        settings = PickSettings(max_picks=1, empty_width=empty_width(scenario.pile))
+        if floating:
+            # The pile is at rest already, the gantry's stiff servos do not lag behind the
+            # descent as the arm does, and nothing is released after the count.
+            settings = replace(settings, settle_time=0.05, close_delay=0.05,
+                               release_time=_POLL)
+            motion: Any = GantryMotion(scenario.bin, return_home=False)
+        else:
+            from tangle_drake.planning.arm_motion import ArmMotion
+
+            motion = ArmMotion(scenario.bin)
+        pick = build_pick_diagram(
+            scenario, TangleChoice(None, FALLBACK_RULE), motion, station=build(scenario),
+            settings=settings,
+            selection=selection_wiring(methods, spec.name, camera_model(scenario).intrinsics))
+        simulator = Simulator(pick.diagram)
+        return _Rig(PileDropper(build(scenario), scenario), pick, simulator,
+                    simulator.get_context().Clone(),
+                    FLOATING_SIM_LIMIT if floating else SIM_TIME_PER_PICK,
+                    settings.update_period, {m.name: m for m in methods})
+
+    def _pick(self, rig: _Rig, state: np.ndarray, run: MethodRun) -> dict:
+        start, cpu = time.perf_counter(), time.process_time()
+        diagram, station = rig.pick.diagram, rig.pick.station
+        context = rig.simulator.get_mutable_context()
+        context.SetTimeStateAndParametersFrom(rig.initial)
+        plant = station.GetSubsystemByName(PLANT_NAME)
+        plant.SetPositionsAndVelocities(plant.GetMyMutableContextFromRoot(context), state)
+        diagram.GetInputPort("method").FixValue(context, run)
+        depth = station.GetOutputPort("camera.depth_image").Eval(
+            station.GetMyContextFromRoot(context))
+        # The pile is at rest and nothing touches it until the descent: locked, it costs
+        # the contact solver nothing (the approach is a fifth of a floating pick).
+        locked = part_bodies(plant)
+        for body in locked:
+            body.Lock(plant.GetMyMutableContextFromRoot(context))
+        rig.simulator.Initialize()
+        mode = diagram.GetOutputPort("mode")
+        while mode.Eval(context) is not Mode.DONE and context.get_time() < rig.sim_limit:
+            if locked and mode.Eval(context) not in _UNTOUCHED:
+                for body in locked:
+                    body.Unlock(plant.GetMyMutableContextFromRoot(context))
+                locked = []
+            step = rig.update_period if locked else _POLL
+            rig.simulator.AdvanceTo(context.get_time() + step)
+        records = diagram.GetOutputPort("picks").Eval(context)
+        record = records[0] if records else None
+        return pick_row(run.name, record, {
+            "sim_s": round(context.get_time(), 3), "wall_s": time.perf_counter() - start,
+            "cpu_s": time.process_time() - cpu,
+            "depth_digest": hashlib.sha256(np.asarray(depth.data).tobytes()).hexdigest()[:16]})
+
+
+def pick_row(method: str, record: PickRecord | None, extra: dict) -> dict:
+    """One pick as plain data (a row of ``results.csv``)."""
+    result, failure = classify(record)
+    row: dict[str, Any] = {"method": method, "result": result, "failure": failure}
+    if record is not None:
+        candidate = record.candidate
+        row.update(
+            outcome=record.outcome.name, reason=record.reason, lifted=record.lifted,
+            width=record.width, rank=record.rank, p_not_tangled=record.p_not_tangled,
+            rejected=len(record.rejected), perception_s=record.perception_s,
+            cnn_s=record.cnn_s, planning_s=record.planning_s, execution_s=record.execution_s,
+            candidate=None if candidate is None else {
+                "u": float(candidate.u), "v": float(candidate.v),
+                "angle_deg": float(candidate.angle_deg), "score": float(candidate.score)})
+    return {**row, **extra}

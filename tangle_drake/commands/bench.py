@@ -1,0 +1,88 @@
+"""``tangle-drake bench``: methods x parts x trials of simulated picks, with a report."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+from pathlib import Path
+
+from tangle_drake.commands.scene import add_scenario_argument
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "bench", help="benchmark the pick methods on simulated piles (resumable, with a report)",
+        description="For each part and trial, drop a fresh random pile, then let each method "
+                    "pick once from that same pile with the physically simulated gripper, and "
+                    "count what came up: exactly one part (success), several (tangled), none "
+                    "(empty), or failure (no candidate, unreachable, collision). Writes "
+                    "report.md, CSV and JSON tables with 95 %% confidence intervals, and PNG "
+                    "plots into --out; run the same command again to resume.")
+    parser.add_argument("--methods", nargs="+", default=None, metavar="METHOD",
+                        help="random (among graspability's top 5), graspability, cnn, "
+                             "harmonic (the paper), or model:PATH (harmonic with your "
+                             "checkpoint); default: random graspability cnn harmonic, leaving "
+                             "out, with a notice, a CNN method whose part has no trained model")
+    parser.add_argument("--parts", "--part", nargs="+", default=None, metavar="PART",
+                        dest="parts",
+                        help="built-in parts or mesh files (default: every built-in part)")
+    parser.add_argument("--mesh-scale", type=float, default=1.0, metavar="S",
+                        help="metres per mesh unit of mesh parts (0.001 for millimetres)")
+    parser.add_argument("--trials", type=int, default=None, metavar="N",
+                        help="piles per part (default 50; a later run may raise it)")
+    parser.add_argument("--mode", choices=("floating", "arm"), default="floating",
+                        help="floating: a free-floating gripper (fast; default); arm: the "
+                             "Nextage of the demo")
+    parser.add_argument("--workers", type=int, default=None, metavar="N",
+                        help="local worker processes (default: one per CPU core); with --ray, "
+                             "the number of Ray actors (default: the cluster's CPUs)")
+    parser.add_argument("--ray", metavar="ADDRESS", default=None,
+                        help="run the trials on an existing Ray cluster (e.g. auto); needs "
+                             "pip install 'tangle_drake[ray]'")
+    parser.add_argument("--out", type=Path, default=Path("results/bench"),
+                        help="results directory (default: results/bench)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the piles (default 0)")
+    add_scenario_argument(parser)
+    parser.add_argument("--quick", action="store_true",
+                        help="a quick check (for CI): unless given, u_hook only, random and "
+                             "graspability, 2 trials; piles of 6 parts")
+    parser.set_defaults(func=run)
+
+
+def command_line(args: argparse.Namespace) -> str:
+    """The command as given (the options that make the results; not --workers or --ray,
+    which change only how fast), for the report."""
+    words = ["tangle-drake", "bench"]
+    for option in ("methods", "parts"):
+        if getattr(args, option) is not None:
+            words += [f"--{option}", *getattr(args, option)]
+    for option, default in (("trials", None), ("mode", "floating"), ("seed", 0),
+                            ("scenario", None), ("mesh_scale", 1.0)):
+        value = getattr(args, option)
+        if value != default:
+            words += [f"--{option.replace('_', '-')}", str(value)]
+    words += ["--quick"] if args.quick else []
+    return shlex.join([*words, "--out", str(args.out)])
+
+
+def run(args: argparse.Namespace) -> int:
+    from tangle_drake.bench.report import terminal_summary
+    from tangle_drake.bench.runner import BenchOptions, run_bench
+
+    outcome = run_bench(BenchOptions(
+        methods=args.methods, parts=args.parts, mesh_scale=args.mesh_scale, trials=args.trials,
+        workers=args.workers, ray=args.ray, out=args.out, mode=args.mode, seed=args.seed,
+        scenario=args.scenario, quick=args.quick,
+        command=command_line(args)))
+    print(terminal_summary(outcome.summary))
+    timings = outcome.summary["throughput"]
+    if timings["cpu_s_per_pick"] is not None:
+        print(f"{timings['picks']} picks, {timings['cpu_s_per_pick']:.1f} CPU s per pick "
+              "(pile included)")
+    for note in outcome.notices:
+        print(note)
+    print(f"wrote {', '.join(path.name for path in outcome.files)} in {outcome.directory}")
+    if outcome.interrupted:
+        print("interrupted: every finished trial is kept; run the same command again to resume")
+        return 130
+    return 0

@@ -1,0 +1,262 @@
+"""``tangle-drake bench``: outcomes classified from hand-made end states, paired piles, a
+resumed run that redoes nothing finished, the command end to end, and bad input refused."""
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from pydrake.math import RigidTransform
+
+from tangle_drake.bench.methods import random_top_k
+from tangle_drake.bench.report import terminal_summary
+from tangle_drake.bench.results import RESULTS_FILE
+from tangle_drake.bench.runner import BenchOptions, plan, run_bench
+from tangle_drake.bench.trials import classify, method_seed, pile_seed
+from tangle_drake.cli import main
+from tangle_drake.crops import CropSpec
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.floating_gripper import build_floating_station
+from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, classify_lift
+from tangle_drake.pile import PileDropper, part_bodies
+from tangle_drake.scenario import PartCount
+from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.station import PLANT_NAME
+from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, save_atomic
+from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
+from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
+
+QUICK = BenchOptions(quick=True, workers=1, show_progress=False)
+
+
+@pytest.fixture(scope="module")
+def untrained_model(tmp_path_factory) -> Path:
+    """A tiny untrained tangle CNN: what the wiring needs, not what a benchmark measures."""
+    torch.manual_seed(0)
+    config = NetworkConfig(input_size=32)
+    path = tmp_path_factory.mktemp("model") / "untrained.pt"
+    save_atomic(model_checkpoint(config, CropSpec(0.05, 32), DEFAULT_NORMALISATION,
+                                 TangleNet(config).state_dict(), part="u_hook"), path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory, untrained_model):
+    """The quick benchmark through the command line, with a user checkpoint as a method."""
+    out = tmp_path_factory.mktemp("bench") / "quick"
+    code = main(["bench", "--quick", "--workers", "1", "--out", str(out), "--methods",
+                 "random", "graspability", f"model:{untrained_model}"])
+    return code, out
+
+
+def trials_in(out: Path) -> list[dict]:
+    return [json.loads(line) for line in (out / RESULTS_FILE).read_text().splitlines()]
+
+
+# --- outcomes -----------------------------------------------------------------------------
+
+
+def test_a_lift_is_judged_by_the_fingers_then_by_the_count():
+    wire = 0.006
+    assert classify_lift(0.003, 1, wire / 4) is Outcome.ONE
+    assert classify_lift(0.003, 3, wire / 4) is Outcome.SEVERAL
+    assert classify_lift(0.0005, 1, wire / 4) is Outcome.NONE  # closed: holds nothing
+    assert classify_lift(0.003, 0, wire / 4) is Outcome.NONE
+    assert classify_lift(0.003, None, wire / 4) is Outcome.HELD  # hardware: no count
+
+
+@pytest.mark.parametrize(("record", "expected"), [
+    (PickRecord(1, Outcome.ONE), ("success", None)),
+    (PickRecord(1, Outcome.SEVERAL, lifted=2), ("tangled", None)),
+    (PickRecord(1, Outcome.NONE), ("empty", None)),
+    (PickRecord(1, reason="no grasp candidate in the bin"), ("failure", "no candidate")),
+    (PickRecord(1, reason="no candidate can be picked (3 unreachable)"),
+     ("failure", "unreachable")),
+    (PickRecord(1, reason="no candidate can be picked (2 collision)"), ("failure", "collision")),
+    (PickRecord(1, reason="safety stop during approach"), ("failure", "other")),
+    (None, ("failure", "timeout")),
+])
+def test_pick_results_and_failure_causes(record, expected):
+    assert classify(record) == expected
+
+
+def test_hand_made_end_states_count_the_parts_hanging_from_the_gripper():
+    scenario = resolve_scenario(None)
+    scenario = replace(scenario, pile=replace(scenario.pile, parts=[PartCount("u_hook", 3)]))
+    station = build_floating_station(scenario)
+    plant = station.GetSubsystemByName(PLANT_NAME)
+    monitor = LiftMonitor(plant, scenario.bin)
+    context = station.CreateDefaultContext()
+    plant_context = plant.GetMyMutableContextFromRoot(context)
+    monitor_context = monitor.CreateDefaultContext()
+    x, y = scenario.bin.center
+    rim = scenario.bin.floor_height + scenario.bin.wall_height
+    plant.SetPositions(plant_context, plant.GetModelInstanceByName("gantry"),
+                       [x, y, rim + 0.15, 0.0])
+    bodies = part_bodies(plant)
+    hanging = RigidTransform([x, y, rim + 0.08])
+    in_bin = RigidTransform([x, y, scenario.bin.floor_height + 0.01])
+    flung = RigidTransform([x + 0.5, y, rim + 0.08])
+
+    def end_state(*poses) -> tuple[str, str | None]:
+        for body, pose in zip(bodies, poses, strict=True):
+            plant.SetFreeBodyPose(plant_context, body, pose)
+        monitor.get_input_port().FixValue(
+            monitor_context, station.GetOutputPort("sim.body_poses").Eval(context))
+        lifted = monitor.lifted_parts(monitor_context)
+        width = 0.003 if lifted else 0.0005  # fingers on a wire, or closed on nothing
+        outcome = classify_lift(width, len(lifted), 0.25 * 0.006)
+        return classify(PickRecord(1, outcome, lifted=len(lifted)))[0]
+
+    assert end_state(hanging, in_bin, in_bin) == "success"
+    assert end_state(hanging, hanging, in_bin) == "tangled"
+    assert end_state(in_bin, in_bin, in_bin) == "empty"
+    assert end_state(hanging, in_bin, flung) == "success"  # thrown clear: not lifted
+
+
+# --- pairing ------------------------------------------------------------------------------
+
+
+def test_a_trial_seed_depends_on_the_run_seed_part_and_index_only():
+    seeds = {pile_seed(0, part, trial) for part in ("u_hook", "c_ring") for trial in range(3)}
+    assert len(seeds) == 6
+    assert pile_seed(0, "u_hook", 1) == pile_seed(0, "u_hook", 1) != pile_seed(1, "u_hook", 1)
+    assert method_seed(0, "u_hook", 1) != pile_seed(0, "u_hook", 1)
+
+
+def test_a_pile_depends_on_its_seed_alone():
+    scenario = resolve_scenario(None)
+    scenario = replace(scenario, pile=replace(scenario.pile, parts=[PartCount("u_hook", 4)]))
+    dropper = PileDropper(build_floating_station(scenario), scenario)
+    first, _ = dropper.drop(7)
+    other, _ = dropper.drop(8)
+    again, _ = dropper.drop(7)
+    assert np.array_equal(first, again)
+    assert not np.array_equal(first, other)
+
+
+def test_every_method_sees_the_same_piles(quick_run):
+    code, out = quick_run
+    assert code == 0
+    trials = trials_in(out)
+    assert sorted(t["trial"] for t in trials) == [0, 1]
+    for trial in trials:
+        assert trial["pile"]["seed"] == pile_seed(0, "u_hook", trial["trial"])
+        assert [p["method"] for p in trial["picks"]] == ["random", "graspability",
+                                                         trials[0]["picks"][2]["method"]]
+        digests = {p["depth_digest"] for p in trial["picks"]}
+        assert len(digests) == 1, "the methods saw different depth images"
+    assert trials[0]["picks"][0]["depth_digest"] != trials[1]["picks"][0]["depth_digest"]
+
+
+def test_random_draws_among_the_top_five_reproducibly():
+    class Candidate:
+        def __init__(self, i):
+            self.u, self.v, self.angle_deg, self.score = float(i), 0.0, 0.0, 1.0 - i / 10
+
+    candidates = [Candidate(i) for i in range(10)]
+    draws = [random_top_k(candidates, seed) for seed in range(200)]
+    assert {d.u for d in draws} == {0.0, 1.0, 2.0, 3.0, 4.0}
+    assert random_top_k(candidates, 5) is random_top_k(candidates, 5)
+    assert random_top_k([], 0) is None
+
+
+# --- the command, its report, resuming ----------------------------------------------------
+
+
+def test_the_quick_benchmark_writes_its_report(quick_run, untrained_model):
+    _, out = quick_run
+    for name in ("report.md", "results.csv", "summary.csv", "paired.csv", "summary.json",
+                 "success.png", "outcomes.png", "bench.json"):
+        assert (out / name).is_file(), name
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["command"] == (f"tangle-drake bench --methods random graspability "
+                                  f"model:{untrained_model} --quick --out {out}")
+    overall = {r["method"]: r for r in summary["rates"] if r["part"] == "all"}
+    assert set(overall) == {"random", "graspability", next(m for m in overall
+                                                           if m.startswith("model:"))}
+    for row in overall.values():
+        assert row["n"] == 2 and row["lower"] <= row["rate"] <= row["upper"]
+    assert len([r for r in summary["paired"] if r["part"] == "all"]) == 3
+    rows = (out / "results.csv").read_text().splitlines()
+    assert len(rows) == 1 + 2 * 3  # a row per pick
+    model_picks = [p for t in trials_in(out) for p in t["picks"] if p["method"].startswith(
+        "model:")]
+    assert all(p.get("p_not_tangled") is not None for p in model_picks
+               if p["result"] != "failure")
+    assert "| method | u_hook | all |" in (out / "report.md").read_text()
+    assert "## Timings" in (out / "report.md").read_text()
+    assert "| random |" in terminal_summary(summary)
+
+
+def test_an_interrupted_run_resumes_without_redoing_finished_trials(tmp_path):
+    out = tmp_path / "resume"
+    first = run_bench(replace(QUICK, out=out, trials=1), say=lambda _: None)
+    assert first.new_trials == 1
+    line = (out / RESULTS_FILE).read_text()
+
+    second = run_bench(replace(QUICK, out=out, trials=2), say=lambda _: None)
+    assert second.new_trials == 1  # trial 0 was not run again
+    lines = (out / RESULTS_FILE).read_text().splitlines(keepends=True)
+    assert lines[0] == line and len(lines) == 2
+
+    # Killed while writing trial 1: half its line on disk. The next run drops it, redoes it.
+    (out / RESULTS_FILE).write_text(lines[0] + lines[1][: len(lines[1]) // 2])
+    said: list[str] = []
+    third = run_bench(replace(QUICK, out=out, trials=2), say=said.append)
+    assert third.new_trials == 1
+    assert any("dropped 1 unreadable line" in s for s in said)
+    again = (out / RESULTS_FILE).read_text().splitlines(keepends=True)
+    assert again[0] == line
+    assert physics(json.loads(again[1])) == physics(json.loads(lines[1]))  # redone the same
+
+    with pytest.raises(TangleDrakeError, match=r"other settings.*methods"):
+        run_bench(replace(QUICK, out=out, methods=["graspability"]), say=lambda _: None)
+
+
+def physics(trial: dict) -> dict:
+    """A trial's result without its timings (which no two runs share)."""
+    timings = {"wall_s", "cpu_s", "perception_s", "cnn_s", "planning_s"}
+
+    def strip(values: dict) -> dict:
+        return {k: v for k, v in values.items() if k not in timings}
+
+    return {**strip(trial), "pile": strip(trial["pile"]),
+            "picks": [strip(p) for p in trial["picks"]]}
+
+
+# --- bad input ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("options", "message"), [
+    (dict(methods=["magic"]), "unknown method 'magic'"),
+    (dict(methods=["model:/no/such.pt"]), "model file not found"),
+    (dict(parts=["no_such_part"]), "no_such_part"),
+    (dict(trials=0), "--trials must be at least 1"),
+    (dict(workers=0), "--workers must be at least 1"),
+    (dict(methods=["random", "random"]), "given twice"),
+    (dict(mode="teleport"), "unknown --mode"),
+])
+def test_bad_arguments_are_clear_errors(options, message):
+    with pytest.raises(TangleDrakeError, match=message):
+        plan(replace(QUICK, **options))
+
+
+def test_a_cnn_method_without_a_model_is_an_error_or_left_out_of_the_defaults(
+        tmp_path, monkeypatch):
+    monkeypatch.setattr("tangle_drake.pick.selection.TRAINED_DIR", tmp_path)
+    with pytest.raises(TangleDrakeError, match=r"'harmonic' needs a tangle model.*u_hook\.pt"):
+        plan(replace(QUICK, methods=["graspability", "harmonic"]))
+    config, trials, notices = plan(BenchOptions(parts=["u_hook"]))
+    assert [m.name for m in config.methods["u_hook"]] == ["random", "graspability"]
+    assert trials == 50 and config.mode == "floating"
+    assert len(notices) == 1 and "cnn, harmonic" in notices[0] and "u_hook.pt" in notices[0]
+
+
+def test_out_must_be_a_directory(tmp_path, capsys):
+    out = tmp_path / "a_file"
+    out.write_text("")
+    assert main(["bench", "--quick", "--out", str(out)]) == 2
+    assert "is a file, not a directory" in capsys.readouterr().err
