@@ -18,14 +18,22 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "finished epoch when the same command is run again.")
     parser.add_argument("--data", type=Path, required=True, help="dataset directory")
     parser.add_argument("--out", type=Path, required=True, help="checkpoint to write (.pt)")
-    parser.add_argument("--epochs", type=int, default=30, help="maximum epochs (default 30)")
-    parser.add_argument("--batch-size", type=int, default=64, help="default 64")
-    parser.add_argument("--lr", type=float, default=1e-3, help="Adam learning rate (1e-3)")
-    parser.add_argument("--seed", type=int, default=0,
-                        help="seed of the split, initial weights and shuffles (default 0)")
-    parser.add_argument("--patience", type=int, default=5,
-                        help="stop after this many epochs without a lower validation loss")
-    parser.add_argument("--augment", choices=("d4", "none"), default="d4",
+    from tangle_drake.tangle_cnn.train_settings import AUGMENTATIONS, TrainSettings
+
+    default = TrainSettings()
+    parser.add_argument("--epochs", type=int, default=default.epochs,
+                        help=f"maximum epochs (default {default.epochs})")
+    parser.add_argument("--batch-size", type=int, default=default.batch_size,
+                        help=f"default {default.batch_size}")
+    parser.add_argument("--lr", type=float, default=default.lr,
+                        help=f"Adam learning rate ({default.lr:g})")
+    parser.add_argument("--seed", type=int, default=default.seed,
+                        help=f"seed of the split, initial weights and shuffles (default "
+                             f"{default.seed})")
+    parser.add_argument("--patience", type=int, default=default.patience,
+                        help=f"stop after this many epochs without a lower validation loss "
+                             f"(default {default.patience})")
+    parser.add_argument("--augment", choices=tuple(AUGMENTATIONS), default=default.augment,
                         help="d4 (default): the paper's x8, 4 rotations x mirror (the 90-degree "
                              "ones turn the closing direction vertical); none")
     parser.add_argument("--device", choices=("auto", "cpu", "cuda"), default="auto",

@@ -17,9 +17,6 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-AUGMENTATIONS: dict[str, int] = {"d4": 8, "none": 1}
-"""Augmentation name -> number of transforms (transform ids 0..n-1)."""
-
 
 def dihedral(x: torch.Tensor, transform: int) -> torch.Tensor:
     """Transform ``transform`` (0..7) of the last two (square) dimensions of ``x``."""

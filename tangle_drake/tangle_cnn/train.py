@@ -23,7 +23,7 @@ import json
 import os
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -32,7 +32,7 @@ from torch import nn
 from tqdm import tqdm
 
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.tangle_cnn.augment import AUGMENTATIONS, augment_batch
+from tangle_drake.tangle_cnn.augment import augment_batch
 from tangle_drake.tangle_cnn.checkpoint import (
     FORMAT_VERSION,
     STATE_KIND,
@@ -43,36 +43,12 @@ from tangle_drake.tangle_cnn.checkpoint import (
 from tangle_drake.tangle_cnn.metrics import binary_metrics
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION, Normalisation
+from tangle_drake.tangle_cnn.train_settings import AUGMENTATIONS, TrainSettings
 from tangle_drake.tangle_cnn.training_data import TrainingData, load_training_data
 
 EVAL_BATCH = 512
 RESUMABLE = ("epochs", "patience")
 """Settings a resumed run may change (to train longer); the others must stay as they were."""
-
-
-@dataclass(frozen=True)
-class TrainSettings:
-    """What ``tangle-drake train`` was asked to do; stored in the checkpoint."""
-
-    epochs: int = 30
-    batch_size: int = 64
-    lr: float = 1e-3
-    seed: int = 0
-    patience: int = 5
-    """Stop after this many epochs without a lower validation loss."""
-    augment: str = "d4"
-    validation_fraction: float = 0.1
-
-    def __post_init__(self) -> None:
-        if self.augment not in AUGMENTATIONS:
-            raise TangleDrakeError(f"unknown augmentation {self.augment!r}; choose one of "
-                                   f"{', '.join(AUGMENTATIONS)}")
-        if self.epochs < 1 or self.batch_size < 1 or self.patience < 1:
-            raise TangleDrakeError("epochs, batch size and patience must be at least 1")
-        if not self.lr > 0:
-            raise TangleDrakeError(f"the learning rate must be positive, got {self.lr}")
-        if not 0 < self.validation_fraction < 1:
-            raise TangleDrakeError("the validation fraction must be between 0 and 1")
 
 
 def state_path(out: Path) -> Path:
