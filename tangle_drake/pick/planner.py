@@ -285,8 +285,8 @@ class PickPlanner(LeafSystem):
         candidates = list(self._candidates.Eval(context))
         record.perception_s = time.perf_counter() - start
         ranked: list[tuple[Any, float | None]] = [(c, None) for c in candidates]
+        start = time.perf_counter()  # HasValue evaluates a connected port: the CNN runs here
         if self._scored.HasValue(context):
-            start = time.perf_counter()
             selected = self._selected.Eval(context) if self._selected.HasValue(context) else None
             ranked = rank_scored(list(self._scored.Eval(context)), selected)
             record.cnn_s = time.perf_counter() - start
