@@ -1,0 +1,48 @@
+"""The shipped tangle models: one per built-in part, made for the current crop, gripper and
+network, described truthfully by the model card."""
+
+import importlib.util
+import json
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tangle_drake.crops import DEFAULT_CROP
+from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.parts.catalog import BUILTIN_PARTS
+from tangle_drake.pick.selection import TRAINED_DIR, resolve_tangle_choice, trained_model_path
+from tangle_drake.tangle_cnn.model import load_tangle_model
+from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
+
+TOOL = Path(__file__).resolve().parent.parent / "tools" / "make_trained_models.py"
+
+
+@pytest.mark.parametrize("part", BUILTIN_PARTS)
+def test_each_built_in_part_ships_a_model_made_for_todays_crop_and_gripper(part):
+    path = trained_model_path(part)
+    model = load_tangle_model(path)
+    info = model.info
+    assert info["part"] == part
+    assert model.crop == DEFAULT_CROP  # inference crops as the data did
+    assert model.normalisation == DEFAULT_NORMALISATION
+    assert info["gripper"] == json.loads(json.dumps(asdict(DEFAULT_GRIPPER)))
+    assert info["data"]["manifest"]["part"] == part
+    assert 0.0 <= info["metrics"]["val_accuracy"] <= 1.0
+    # It scores crops: probabilities, not constants.
+    rng = np.random.default_rng(0)
+    crops = 0.5 - 0.04 * rng.random((8, DEFAULT_CROP.size_px, DEFAULT_CROP.size_px))
+    p = model.predict(crops.astype(np.float32), np.full(8, 0.5, np.float32))
+    assert p.shape == (8,) and np.all((p >= 0) & (p <= 1)) and np.ptp(p) > 0
+    # The demo and the benchmark pick it up with the paper's rule.
+    assert resolve_tangle_choice(part) == resolve_tangle_choice(part, "harmonic", path)
+
+
+def test_the_model_card_says_what_the_shipped_files_hold():
+    spec = importlib.util.spec_from_file_location("make_trained_models", TOOL)
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    card = (TRAINED_DIR / "README.md").read_text()
+    for part in BUILTIN_PARTS:
+        assert tool.card_row(trained_model_path(part)) in card, part
