@@ -16,7 +16,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "pick once from that same pile with the physically simulated gripper, and "
                     "count what came up: exactly one part (success), several (tangled), none "
                     "(empty), or failure (no candidate, unreachable, collision). Writes "
-                    "report.md, CSV and JSON tables with 95 %% confidence intervals, and PNG "
+                    "report.md, CSV and JSON tables with 95 % confidence intervals, and PNG "
                     "plots into --out; run the same command again to resume.")
     parser.add_argument("--methods", nargs="+", default=None, metavar="METHOD",
                         help="random (among graspability's top 5), graspability, cnn, "
