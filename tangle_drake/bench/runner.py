@@ -145,7 +145,8 @@ def run_bench(options: BenchOptions, say: Callable[[str], None] = print) -> Benc
     store = ResultStore(Path(options.out), run_identity)
     for notice in store.notices:
         say(notice)
-    todo = [(i, t) for i, spec in enumerate(config.parts) for t in range(trials)
+    # Trial by trial across the parts, so a run stopped early covers every part alike.
+    todo = [(i, t) for t in range(trials) for i, spec in enumerate(config.parts)
             if (spec.name, t) not in store.trials]
     total = len(config.parts) * trials
     say(f"benchmark: {len(config.parts)} part(s) x {trials} trial(s), {options.mode} mode, "
