@@ -29,7 +29,8 @@ def run_demo_command(*argv: str) -> None:
     (["--hardware", "--meshcat"], "with --hardware there is none in the controller"),
     (["--hardware"], "'memq://', which no other process can reach"),
 ])
-def test_bad_arguments_are_refused_with_a_clear_message(argv, message):
+def test_bad_arguments_are_refused_with_a_clear_message(argv, message, tmp_path, monkeypatch):
+    monkeypatch.setattr(selection, "TRAINED_DIR", tmp_path)  # no shipped models
     with pytest.raises(TangleDrakeError, match=message):
         run_demo_command(*argv)
 
