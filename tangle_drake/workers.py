@@ -13,6 +13,7 @@ Ctrl-C (the driver stops them), and exit on their own if the driver dies (``kill
 
 from __future__ import annotations
 
+import argparse
 import multiprocessing
 import os
 import signal
@@ -152,3 +153,13 @@ def start_workers(factory: WorkerFactory, args: Sequence[Any], workers: int | No
     if count == 1:
         return InlineWorker(factory, args)
     return ProcessWorkers(factory, args, count)
+
+
+def add_worker_arguments(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--workers`` and ``--ray``, for a command whose units of work are ``what``."""
+    parser.add_argument("--workers", type=int, default=None, metavar="N",
+                        help="local worker processes (default: one per CPU core); with "
+                             "--ray, the number of Ray actors (default: the cluster's CPUs)")
+    parser.add_argument("--ray", metavar="ADDRESS", default=None,
+                        help=f"run the {what} on an existing Ray cluster (e.g. auto, or "
+                             "ray://head:10001); needs pip install 'tangle_drake[ray]'")

@@ -7,6 +7,7 @@ import shlex
 from pathlib import Path
 
 from tangle_drake.commands.scene import add_scenario_argument
+from tangle_drake.workers import add_worker_arguments
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -33,12 +34,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--mode", choices=("floating", "arm"), default="floating",
                         help="floating: a free-floating gripper (fast; default); arm: the "
                              "Nextage of the demo")
-    parser.add_argument("--workers", type=int, default=None, metavar="N",
-                        help="local worker processes (default: one per CPU core); with --ray, "
-                             "the number of Ray actors (default: the cluster's CPUs)")
-    parser.add_argument("--ray", metavar="ADDRESS", default=None,
-                        help="run the trials on an existing Ray cluster (e.g. auto); needs "
-                             "pip install 'tangle_drake[ray]'")
+    add_worker_arguments(parser, "trials")
     parser.add_argument("--out", type=Path, default=Path("results/bench"),
                         help="results directory (default: results/bench)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the piles (default 0)")

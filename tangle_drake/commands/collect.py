@@ -11,6 +11,8 @@ import argparse
 from dataclasses import replace
 from pathlib import Path
 
+from tangle_drake.workers import add_worker_arguments
+
 DEFAULT_SAMPLES = 5100
 
 
@@ -32,12 +34,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help=f"stop once the dataset holds this many (default {DEFAULT_SAMPLES})")
     parser.add_argument("--out", type=Path, required=True, help="dataset directory")
     parser.add_argument("--seed", type=int, default=0, help="collection seed (default 0)")
-    parser.add_argument("--workers", type=int, default=None, metavar="N",
-                        help="local worker processes (default: one per CPU core); with "
-                             "--ray, the number of Ray actors (default: the cluster's CPUs)")
-    parser.add_argument("--ray", metavar="ADDRESS", default=None,
-                        help="run the tasks on an existing Ray cluster (e.g. auto, or "
-                             "ray://head:10001); needs pip install 'tangle_drake[ray]'")
+    add_worker_arguments(parser, "tasks")
     parser.add_argument("--parts-per-pile", type=int, default=None, metavar="N",
                         help="parts in each pile (default: per part, about three layers)")
     parser.add_argument("--lifts-per-pile", type=int, default=None, metavar="K",
