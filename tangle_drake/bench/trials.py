@@ -125,12 +125,12 @@ class _Rig:
 
 
 class TrialWorker:
-    """Runs trials (``(part index, trial index)``) for a :class:`BenchConfig`; keeps the
-    last part's station, as trials come part by part."""
+    """Runs trials (``(part index, trial index)``) for a :class:`BenchConfig`; keeps each
+    part's rig (~100 MB) once built, as trials come round-robin across the parts."""
 
     def __init__(self, config: BenchConfig) -> None:
         self.config = config
-        self._rig: tuple[str, _Rig] | None = None
+        self._rigs: dict[str, _Rig] = {}
 
     def run_task(self, task: tuple[int, int]) -> dict:
         """One trial's result: the pile, and one pick per method (see ``results``)."""
@@ -152,10 +152,9 @@ class TrialWorker:
                 "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
 
     def _rig_for(self, spec: PartSpec) -> _Rig:
-        if self._rig is None or self._rig[0] != spec.name:
-            self._rig = None  # free the last part's diagrams first
-            self._rig = (spec.name, self._build(spec))
-        return self._rig[1]
+        if spec.name not in self._rigs:
+            self._rigs[spec.name] = self._build(spec)
+        return self._rigs[spec.name]
 
     def _build(self, spec: PartSpec) -> _Rig:
         scenario = part_scenario(self.config, spec)
