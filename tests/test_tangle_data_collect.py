@@ -141,10 +141,11 @@ def test_a_mesh_file_part_collects_and_is_bound_by_content(tmp_path):
     out = tmp_path / "plates"
     assert run_cli("--part", str(mesh), "--mesh-scale", "0.001", "--parts-per-pile", "3",
                    "--lifts-per-pile", "2", "--samples", "1", "--workers", "1",
-                   "--full-depth", "--out", str(out)) == 0
+                   "--full-depth", "--crop-size", "0.15", "--out", str(out)) == 0
     manifest = read_manifest(out)
     assert manifest["part"] == "plate" and len(manifest["part_sha256"]) == 64
     assert manifest["full_depth"] is True
+    assert manifest["crop"] == {"size_m": 0.15, "size_px": 96}
     samples = load_samples(out, ("part", "full_depth", "u", "v"))
     assert set(samples["part"].tolist()) == {"plate"}
     assert samples["full_depth"].shape[1:] == (480, 640)
@@ -154,7 +155,7 @@ def test_a_mesh_file_part_collects_and_is_bound_by_content(tmp_path):
     with pytest.raises(TangleDrakeError, match="part_sha256"):
         run_cli("--part", str(mesh), "--mesh-scale", "0.001", "--parts-per-pile", "3",
                 "--lifts-per-pile", "2", "--samples", "5", "--workers", "1", "--full-depth",
-                "--out", str(out))
+                "--crop-size", "0.15", "--out", str(out))
 
 
 @pytest.mark.parametrize(("argv", "message"), [
@@ -166,6 +167,7 @@ def test_a_mesh_file_part_collects_and_is_bound_by_content(tmp_path):
     (["--part", "c_ring", "--parts-per-pile", "0"], "--parts-per-pile"),
     (["--part", "c_ring", "--mesh-scale", "-1"], "mesh_scale"),
     (["--part", "c_ring", "--repeat", "0"], "--repeat"),
+    (["--part", "c_ring", "--crop-size", "0"], "--crop-size"),
 ])
 def test_bad_input_is_a_clear_error(argv, message, tmp_path):
     with pytest.raises(TangleDrakeError, match=message):

@@ -49,6 +49,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--repeat", type=int, default=1, metavar="K",
                         help="re-run each lift K times under small perturbations and report "
                              "the label agreement (default 1: no re-runs)")
+    parser.add_argument("--crop-size", type=float, default=None, metavar="M",
+                        help="side of the square depth crop around each grasp, m (default: "
+                             "the open hand plus 2 cm a side, 0.101 m); resampled to 96 px")
     parser.add_argument("--full-depth", action="store_true",
                         help="also store each sample's whole depth image (~1.2 MB each)")
     parser.add_argument("--scenario", default=None,
@@ -67,6 +70,8 @@ def settings_from_args(args: argparse.Namespace):
                                repeat=args.repeat, full_depth=args.full_depth)
     if args.top_k is not None:
         settings = replace(settings, top_k=args.top_k)
+    if args.crop_size is not None:
+        settings = replace(settings, crop=replace(settings.crop, size_m=args.crop_size))
     if args.lifts_per_pile is not None:
         settings = replace(settings, lifts_per_pile=args.lifts_per_pile)
     if args.lift_height is not None:

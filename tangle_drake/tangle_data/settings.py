@@ -135,6 +135,7 @@ class CollectSettings:
                                    f"({self.top_k}), got {self.lifts_per_pile}")
         if self.repeat < 1:
             raise TangleDrakeError(f"--repeat must be at least 1, got {self.repeat}")
+        _positive("--crop-size", self.crop.size_m)
         if not 0 <= self.seed < 2**63:
             raise TangleDrakeError(f"--seed must be a non-negative 63-bit integer, got "
                                    f"{self.seed}")
