@@ -51,7 +51,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "the label agreement (default 1: no re-runs)")
     parser.add_argument("--crop-size", type=float, default=None, metavar="M",
                         help="side of the square depth crop around each grasp, m (default: "
-                             "the open hand plus 2 cm a side, 0.101 m); resampled to 96 px")
+                             "the open hand plus 2 cm a side); resampled to 96 px")
     parser.add_argument("--full-depth", action="store_true",
                         help="also store each sample's whole depth image (~1.2 MB each)")
     parser.add_argument("--scenario", default=None,
