@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -15,7 +16,9 @@ from tangle_drake.graspability import (
     compute_candidates,
     compute_candidates_from_height_map,
 )
+from tangle_drake.graspability.index import grasp_maps
 from tangle_drake.graspability.inputs import check_depth
+from tangle_drake.graspability.params import FINGER_GRIP_SPAN_M
 from tangle_drake.graspability.synthetic import HeightField, pile_field
 from tangle_drake.graspability.workmap import View, build_work_map
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
@@ -120,6 +123,25 @@ def test_part_whose_fingers_would_land_on_taller_neighbours_is_rejected():
     assert crowded  # the blocks themselves can be grasped ...
     for c in crowded:  # ... but never the bar between them
         assert FLOOR - c.depth_m > 0.03 - INSERTION - 0.002
+
+
+@pytest.mark.parametrize("length", [0.02, 0.03])
+def test_grip_test_closes_across_a_short_bar_never_along_it(length: float):
+    """A bar shorter than the opening fits between the fingers lengthwise: the plain index
+    closes along it too (on its rounded ends, which squirt out); with the grip test the hand
+    closes along it nowhere, and across it wherever the plain index does."""
+    f = field()
+    bar(f, length=length)  # along +u: orientation 0 closes along it, n/2 across
+    params = GraspabilityParams(max_grip_span_m=FINGER_GRIP_SPAN_M)
+    work = build_work_map(check_depth(f.render(K, FLOOR), K), View.of_camera(K),
+                          params.cell_size_m)
+    plain = grasp_maps(work, HAND, replace(params, max_grip_span_m=None)).encoded
+    tested = grasp_maps(work, HAND, params).encoded
+    across = params.n_orientations // 2
+    assert np.count_nonzero(plain[0]) > 20 and np.count_nonzero(tested[0]) == 0
+    assert np.count_nonzero(tested[across]) > 100
+    assert np.array_equal(tested[across], plain[across])
+    assert np.all((tested == 0) | (tested == plain))  # it only ever removes grasps
 
 
 def test_fingers_from_the_gripper_spec():

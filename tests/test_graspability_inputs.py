@@ -116,6 +116,8 @@ def test_bad_parameters():
         GraspabilityParams(n_orientations=0)
     with pytest.raises(ValueError):
         GraspabilityParams(peak_tolerance=1.0)
+    with pytest.raises(ValueError, match="max_grip_span_m"):
+        GraspabilityParams(max_grip_span_m=float("nan"))
     with pytest.raises(ValueError):
         HandModel(0.045, 0.008, 0.012, 0.0, 0.01)
     deep = GraspabilityParams(insertion_depth_m=DEFAULT_GRIPPER.finger_length)

@@ -21,6 +21,7 @@ from tangle_drake.graspability import GraspabilityParams, HandModel
 from tangle_drake.graspability.candidates import candidates_from_depth
 from tangle_drake.graspability.index import grasp_maps
 from tangle_drake.graspability.inputs import height_map_to_depth
+from tangle_drake.graspability.params import FINGER_GRIP_SPAN_M
 from tangle_drake.graspability.ranking import coarse_blur
 from tangle_drake.graspability.reference import reference_grasp_maps
 from tangle_drake.graspability.roi import roi_mask
@@ -59,6 +60,11 @@ CASES = [
                  id="16-bit-levels"),
     pytest.param(4, DEFAULT_GRIPPER, GraspabilityParams(roi_margin_px=3), False, (10, 5, 70, 60),
                  id="region-of-interest"),
+    pytest.param(5, DEFAULT_GRIPPER,
+                 GraspabilityParams(grip_layer_m=0.002, max_grip_span_m=0.008), False, None,
+                 id="tight-grip-test"),
+    pytest.param(6, DEFAULT_GRIPPER, GraspabilityParams(max_grip_span_m=FINGER_GRIP_SPAN_M),
+                 False, None, id="finger-grip-test"),
 ]
 
 
@@ -76,6 +82,9 @@ def test_fast_maps_and_candidates_equal_the_reference(seed, gripper, params, tal
     assert np.count_nonzero(fast.encoded) > 100  # a scene with something to grasp
     assert roi is None or np.count_nonzero(fast.levels.index == 0) > 1000
     assert np.array_equal(fast.encoded, slow.encoded)
+    without_grip_test = grasp_maps(work, hand, replace(params, max_grip_span_m=None))
+    dropped = np.count_nonzero(without_grip_test.encoded) - np.count_nonzero(fast.encoded)
+    assert dropped > 100 if params.max_grip_span_m is not None else dropped == 0
 
     def candidates(maps_function):
         found = candidates_from_depth(depth, view, hand, params, roi, None, maps_function)

@@ -23,6 +23,7 @@ from tangle_drake.bin_model import inner_corners
 from tangle_drake.camera import CameraModel
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import GraspabilityParams, bin_roi
+from tangle_drake.graspability.params import FINGER_GRIP_SPAN_M
 from tangle_drake.graspability.system import GraspabilitySystem
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_spec
@@ -80,6 +81,8 @@ def default_graspability_params(scenario: Scenario) -> GraspabilityParams:
     The insertion depth is one depth level less than the thinnest wire, so a wire lying alone
     on the bin's floor still has its top above the fingertips' level plus the insertion
     (the planner presses the grasp deeper anyway, see ``ApproachSettings.press_depth``).
+    The grip test is on (:data:`~tangle_drake.graspability.params.FINGER_GRIP_SPAN_M`): real
+    fingers push a wire that runs between them out sideways.
     The candidates keep the palm's overhang off the bin's walls (:func:`palm_margin_px`), and
     there are twice the index's default number of them, as the arm cannot reach every one
     (deep in the bin, near the wall on the robot's side, the wrist meets the wall).
@@ -89,6 +92,7 @@ def default_graspability_params(scenario: Scenario) -> GraspabilityParams:
     insertion = defaults.insertion_depth_m if wire is None else max(
         defaults.insertion_depth_m, wire - defaults.level_step_m)
     return replace(defaults, insertion_depth_m=insertion, top_k=2 * defaults.top_k,
+                   max_grip_span_m=FINGER_GRIP_SPAN_M,
                    roi_margin_px=palm_margin_px(camera_model(scenario), scenario.bin))
 
 
