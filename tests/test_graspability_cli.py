@@ -10,6 +10,7 @@ import pytest
 
 from tangle_drake.camera import CameraIntrinsics, CameraModel, save_camera_json, top_view_pose
 from tangle_drake.cli import main
+from tangle_drake.graspability import GraspabilityParams, compute_candidates
 from tangle_drake.graspability.synthetic import pile_field
 
 FLOOR = 0.5
@@ -124,3 +125,23 @@ def test_metric_depth_without_a_camera(tmp_path, pile, capsys):
     assert code == 1 and "not a valid camera" in err
     code, _, err = run(capsys, tmp_path / "pile.npy", "--top-k", 0)
     assert code == 2 and "--top-k" in err
+    code, _, err = run(capsys, tmp_path / "pile.npy", "--grip-span", -0.01)
+    assert code == 2 and "--grip-span" in err
+
+
+def test_grip_span_option_runs_the_grip_test(tmp_path, pile, capsys):
+    _, depth = pile
+    np.save(tmp_path / "pile.npy", depth)
+    camera = CameraModel(K, top_view_pose(np.zeros(3), FLOOR))
+    save_camera_json(tmp_path / "camera.json", camera)
+    found = {}
+    for span in (None, 0.014):
+        extra = () if span is None else ("--grip-span", span)
+        code, _, err = run(capsys, tmp_path / "pile.npy", "--top-k", 10, "--json",
+                           tmp_path / f"{span}.json", *extra)
+        assert code == 0, err
+        found[span] = json.loads((tmp_path / f"{span}.json").read_text())[0]["candidates"]
+        params = GraspabilityParams(top_k=10, max_grip_span_m=span)
+        expected = [c.to_dict() for c in compute_candidates(depth, camera, params=params)]
+        assert found[span] == expected
+    assert found[None] != found[0.014]

@@ -27,6 +27,7 @@ from tangle_drake.graspability import (
 )
 from tangle_drake.graspability.inputs import height_map_to_depth, read_image_file
 from tangle_drake.graspability.overlay import depth_preview, draw_candidates
+from tangle_drake.graspability.params import FINGER_GRIP_SPAN_M
 from tangle_drake.graspability.workmap import View
 from tangle_drake.gripper import DEFAULT_GRIPPER
 
@@ -55,6 +56,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--roi-margin", type=int, default=0, metavar="PX",
                         help="keep the hand this many pixels inside the ROI's (or the "
                              "image's) edge")
+    parser.add_argument("--grip-span", type=float, metavar="M",
+                        help="grip test: drop grasps whose squeezed top layer stretches more "
+                             "than M metres along the closing direction (off by default, as "
+                             f"in the paper; the pick diagram uses {FINGER_GRIP_SPAN_M})")
     parser.add_argument("--json", type=Path, metavar="OUT", help="write the results here")
     parser.add_argument("--overlay", type=Path, metavar="DIR",
                         help="write a PNG per image with the candidates' hands drawn")
@@ -64,7 +69,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.top_k < 1 or args.roi_margin < 0:
         raise TangleDrakeError("--top-k must be at least 1 and --roi-margin at least 0")
-    params = GraspabilityParams(top_k=args.top_k, roi_margin_px=args.roi_margin)
+    if args.grip_span is not None and not args.grip_span > 0:
+        raise TangleDrakeError(f"--grip-span must be a positive length, got {args.grip_span}")
+    params = GraspabilityParams(top_k=args.top_k, roi_margin_px=args.roi_margin,
+                                max_grip_span_m=args.grip_span)
     roi = None if args.roi is None else tuple(args.roi)
     hand = HandModel.from_gripper(DEFAULT_GRIPPER)
     cameras: dict[Path, CameraModel] = {}
