@@ -26,10 +26,11 @@ def test_one_pick_end_to_end(tmp_path):
     # The gripper's own check and the monitor agree on whether something came up.
     assert (record.outcome is Outcome.NONE) == (record.width < 0.0015 or record.lifted == 0)
     assert 5.0 < record.execution_s < 30.0 and record.planning_s < 5.0
-    assert any(line.startswith("pick 1: ") for line in lines)
     assert lines[-1].startswith("1 pick(s): ")
     left = 6 - (record.lifted if record.outcome is not Outcome.NONE else 0)
     assert f"; {left} of 6 parts left in the bin" in lines[-1]  # released outside the bin
+    pick_line = next(line for line in lines if line.startswith("pick 1: "))
+    assert pick_line.endswith(f" | {left} of 6 parts in the bin")
 
     assert "<html" in (tmp_path / "demo.html").read_text()[:1000].lower()
     dot = (tmp_path / "pick_demo.dot").read_text()

@@ -123,7 +123,8 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
 
     if meshcat is not None and options.record:
         meshcat.StartRecording(RECORD_FPS, set_visualizations_while_recording=options.meshcat)
-    records = _run(simulator, pick, options.picks, say)
+    records = _run(simulator, pick, options.picks, say,
+                   _bin_count(station, simulator, scenario, scenario.pile.total_count))
     if meshcat is not None and options.record:
         meshcat.StopRecording()
         meshcat.PublishRecording()
@@ -154,9 +155,12 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
         loop = HardwareInTheLoop(scenario, make, options.seed, progress=say)
         say(f"hardware simulator and controller in this process over {IN_PROCESS_URL}; "
             f"set-up {time.perf_counter() - start:.1f} s; picking {options.picks} part(s)")
-        records = _run(loop, built[0], options.picks, say)
-        left = parts_in_bin(loop.robot.station, loop.robot.simulator.get_context(), scenario)
-        say(f"{summarize(records)}; {left} of {loop.robot.pile.num_in_bin} parts left in the "
+        robot = loop.robot
+        records = _run(loop, built[0], options.picks, say,
+                       _bin_count(robot.station, robot.simulator, scenario,
+                                  robot.pile.num_in_bin))
+        left = parts_in_bin(robot.station, robot.simulator.get_context(), scenario)
+        say(f"{summarize(records)}; {left} of {robot.pile.num_in_bin} parts left in the "
             f"bin; wall time {time.perf_counter() - start:.0f} s")
         return records
 
@@ -180,6 +184,13 @@ def parts_in_bin(station: Diagram, context: Context, scenario: Scenario) -> int:
     plant_context = plant.GetMyContextFromRoot(context)
     return sum(bool(inside_bin(scenario.bin, body.EvalPoseInWorld(plant_context).translation()))
                for body in part_bodies(plant))
+
+
+def _bin_count(station: Diagram, simulator: Simulator, scenario: Scenario,
+               total: int) -> Callable[[], str]:
+    """Simulation only: "N of M parts in the bin" at the time it is called."""
+    return lambda: (f"{parts_in_bin(station, simulator.get_context(), scenario)} of {total} "
+                    "parts in the bin")
 
 
 def _settled_pile(station: Diagram, scenario: Scenario, seed: int | None,
@@ -206,9 +217,11 @@ def _simulator(pick: PickDiagram, plant_state: np.ndarray) -> Simulator:
 
 
 def _run(simulator: Simulator | HardwareInTheLoop, pick: PickDiagram, picks: int,
-         say: Callable[[str], None]) -> list[PickRecord]:
+         say: Callable[[str], None],
+         in_bin: Callable[[], str] | None = None) -> list[PickRecord]:
     """Advance until the planner is done, stopped by the station's safety, or out of time,
-    reporting each pick as it ends."""
+    reporting each pick as it ends; in simulation with what is left in the bin (``in_bin``),
+    so a part that a pick pushed over the wall shows up at that pick."""
     context = simulator.get_context()
     mode_port, picks_port = pick.diagram.GetOutputPort("mode"), pick.diagram.GetOutputPort("picks")
     reported = 0
@@ -226,6 +239,6 @@ def _run(simulator: Simulator | HardwareInTheLoop, pick: PickDiagram, picks: int
         simulator.AdvanceTo(context.get_time() + 0.5)
         records = picks_port.Eval(context)
         for record in records[reported:]:
-            say(record.describe())
+            say(record.describe() + ("" if in_bin is None else f" | {in_bin()}"))
         reported = len(records)
     return list(picks_port.Eval(context))
