@@ -8,7 +8,7 @@ time and in CPU time of this thread (less sensitive to other processes than wall
 though a busy machine slows both).
 
     python tools/bench_graspability.py [--sizes 320x240 640x480 1280x960] [--images 20]
-        [--repeats 5] [--parts 30] [--orientations 16] [--cell-size 0.0025]
+        [--repeats 5] [--parts 30] [--orientations 16] [--cell-size 0.0025] [--grip-span 0.014]
 
 (with the package installed, or from the repository root with ``PYTHONPATH=.``). Target: a
 median of at most 20 ms per 640x480 image.
@@ -36,12 +36,16 @@ def main() -> None:
     parser.add_argument("--orientations", type=int, default=16)
     parser.add_argument("--cell-size", type=float, default=GraspabilityParams.cell_size_m,
                         help="work-map cell, metres")
+    parser.add_argument("--grip-span", type=float, metavar="M",
+                        help="with the grip test (off by default, as in the paper)")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     cv2.setNumThreads(1)
-    params = GraspabilityParams(n_orientations=args.orientations, cell_size_m=args.cell_size)
+    params = GraspabilityParams(n_orientations=args.orientations, cell_size_m=args.cell_size,
+                                max_grip_span_m=args.grip_span)
+    grip = "off" if args.grip_span is None else f"{args.grip_span * 1e3:g} mm"
     print(f"one core (cv2.setNumThreads(1)), {args.orientations} orientations, "
-          f"{args.cell_size * 1e3:g} mm cells, "
+          f"{args.cell_size * 1e3:g} mm cells, grip test {grip}, "
           f"{args.parts} parts per pile, {args.images} piles x {args.repeats} runs per size, "
           f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
     print(f"{'size':>10} {'wall median':>12} {'wall p95':>9} {'cpu median':>11} {'cpu p95':>8}"
