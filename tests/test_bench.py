@@ -12,7 +12,7 @@ from pydrake.math import RigidTransform
 
 from tangle_drake.bench.methods import random_top_k
 from tangle_drake.bench.report import terminal_summary
-from tangle_drake.bench.results import RESULTS_FILE
+from tangle_drake.bench.results import IDENTITY_FILE, RESULTS_FILE
 from tangle_drake.bench.runner import BenchOptions, plan, run_bench
 from tangle_drake.bench.trials import classify, method_seed, pile_seed
 from tangle_drake.cli import main
@@ -199,6 +199,8 @@ def test_an_interrupted_run_resumes_without_redoing_finished_trials(tmp_path):
 
     second = run_bench(replace(QUICK, out=out, trials=2), say=lambda _: None)
     assert second.new_trials == 1  # trial 0 was not run again
+    header = (out / "report.md").read_text().splitlines()[2]
+    assert "1 trial(s) run in" in header and "1 from earlier runs" in header
     lines = (out / RESULTS_FILE).read_text().splitlines(keepends=True)
     assert lines[0] == line and len(lines) == 2
 
@@ -214,6 +216,15 @@ def test_an_interrupted_run_resumes_without_redoing_finished_trials(tmp_path):
 
     with pytest.raises(TangleDrakeError, match=r"other settings.*methods"):
         run_bench(replace(QUICK, out=out, methods=["graspability"]), say=lambda _: None)
+
+    # Results made with other graspability settings (e.g. before the grip test) are not mixed.
+    identity_file = out / IDENTITY_FILE
+    stored = json.loads(identity_file.read_text())
+    for params in stored["graspability"].values():
+        params["max_grip_span_m"] = None
+    identity_file.write_text(json.dumps(stored))
+    with pytest.raises(TangleDrakeError, match=r"other settings.*graspability"):
+        run_bench(replace(QUICK, out=out, trials=2), say=lambda _: None)
 
 
 def physics(trial: dict) -> dict:

@@ -195,11 +195,19 @@ def rate_table(summary: dict) -> str:
     return "\n".join(lines)
 
 
+def _this_run(summary: dict) -> str:
+    """What this invocation ran: a resumed run's minutes cover its new trials only."""
+    ran = (f"{summary['new_trials']} trial(s) run in {summary['elapsed_s'] / 60:.1f} min with "
+           f"{summary['workers']} worker(s)")
+    earlier = summary["earlier_trials"]
+    return ran + (f", {earlier} from earlier runs of the same command" if earlier else "")
+
+
 def markdown(summary: dict) -> str:
     """``report.md``."""
     out = [f"# Bin-picking benchmark ({summary['mode']} mode)", "",
-           f"Made by `{summary['command']}` ({summary['made_by']}), {summary['date']}, "
-           f"{summary['workers']} worker(s), {summary['elapsed_s'] / 60:.1f} min.", "",
+           f"Made by `{summary['command']}` ({summary['made_by']}), {summary['date']}: "
+           f"{_this_run(summary)}.", "",
            "Success = exactly one part lifted. Rates in %, with the Wilson 95 % confidence "
            "interval; every method picks from the same piles (paired).", ""]
     out += [f"> {note}" for note in summary["notes"]] + ([""] if summary["notes"] else [])

@@ -14,7 +14,7 @@ import os
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, wait
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from tqdm import tqdm
@@ -23,9 +23,10 @@ from tangle_drake import __version__
 from tangle_drake.bench.methods import DEFAULT_METHODS, Method, file_digest, parse_method
 from tangle_drake.bench.report import summarize_run, write_report
 from tangle_drake.bench.results import ResultStore
-from tangle_drake.bench.trials import MODES, BenchConfig, PartSpec, TrialWorker
+from tangle_drake.bench.trials import MODES, BenchConfig, PartSpec, TrialWorker, part_scenario
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, load_part
+from tangle_drake.pick.diagram import default_graspability_params
 from tangle_drake.scenario import parse_scenario
 from tangle_drake.scenario_files import scenario_path
 from tangle_drake.workers import start_workers
@@ -122,7 +123,7 @@ def _unique(names: list[str], what: str) -> None:
 
 def identity(config: BenchConfig) -> dict:
     """What ``bench.json`` binds the results to (all but the trial count): models and meshes
-    by content, so changing one is a new run."""
+    by content, and each part's graspability settings, so changing one is a new run."""
     return {
         "format": 1, "mode": config.mode, "seed": config.seed, "pile_size": config.pile_size,
         "scenario_sha256": hashlib.sha256(config.scenario_text.encode()).hexdigest(),
@@ -133,6 +134,8 @@ def identity(config: BenchConfig) -> dict:
                             "model_sha256": file_digest(m.model_for(part))
                             if m.needs_model else None} for m in methods]
                     for part, methods in config.methods.items()},
+        "graspability": {p.name: asdict(default_graspability_params(part_scenario(config, p)))
+                         for p in config.parts},
     }
 
 
@@ -164,6 +167,7 @@ def run_bench(options: BenchOptions, say: Callable[[str], None] = print) -> Benc
         "command": options.command, "mode": options.mode, "made_by": f"tangle_drake "
         f"{__version__}", "date": datetime.date.today().isoformat(), "workers": workers,
         "elapsed_s": time.perf_counter() - start, "trials_per_part": trials,
+        "new_trials": new, "earlier_trials": len(done) - new,
         "config": run_identity, "notes": notices})
     files = write_report(store.directory, done, summary, names, methods)
     return BenchOutcome(store.directory, summary, files, new, interrupted, notices)
