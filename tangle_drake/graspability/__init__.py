@@ -11,10 +11,11 @@ from tangle_drake.graspability.candidates import (
     compute_candidates_from_height_map,
 )
 from tangle_drake.graspability.hand import HandModel
-from tangle_drake.graspability.params import GraspabilityParams
+from tangle_drake.graspability.params import FINGER_GRIP_SPAN_M, GraspabilityParams
 from tangle_drake.graspability.roi import bin_roi, roi_mask
 
 __all__ = [
+    "FINGER_GRIP_SPAN_M",
     "GraspCandidate",
     "GraspabilityParams",
     "HandModel",
