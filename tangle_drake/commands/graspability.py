@@ -19,6 +19,7 @@ import numpy as np
 from tangle_drake.camera import CameraModel, load_camera_json
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import (
+    FINGER_GRIP_SPAN_M,
     GraspabilityParams,
     GraspCandidate,
     HandModel,
@@ -27,7 +28,6 @@ from tangle_drake.graspability import (
 )
 from tangle_drake.graspability.inputs import height_map_to_depth, read_image_file
 from tangle_drake.graspability.overlay import depth_preview, draw_candidates
-from tangle_drake.graspability.params import FINGER_GRIP_SPAN_M
 from tangle_drake.graspability.workmap import View
 from tangle_drake.gripper import DEFAULT_GRIPPER
 

@@ -22,8 +22,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 from tangle_drake.bin_model import inner_corners
 from tangle_drake.camera import CameraModel
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.graspability import GraspabilityParams, bin_roi
-from tangle_drake.graspability.params import FINGER_GRIP_SPAN_M
+from tangle_drake.graspability import FINGER_GRIP_SPAN_M, GraspabilityParams, bin_roi
 from tangle_drake.graspability.system import GraspabilitySystem
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_spec
