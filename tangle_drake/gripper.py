@@ -15,7 +15,9 @@ between the finger pads, where the target's centre should be when the gripper cl
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -69,6 +71,15 @@ class GripperSpec:
     def outer_width_open(self) -> float:
         """Outer extent of the open fingers along y, m (what must fit between obstacles)."""
         return self.max_opening + 2 * self.finger_thickness
+
+    @staticmethod
+    def from_dict(data: Mapping[str, Any]) -> GripperSpec:
+        """The spec a dataset manifest or checkpoint stores (``asdict``, lists for tuples);
+        ``TypeError``/``ValueError`` on a bad dict."""
+        values = dict(data)
+        if "palm_size" in values:
+            values["palm_size"] = tuple(values["palm_size"])
+        return GripperSpec(**values)
 
 
 DEFAULT_GRIPPER = GripperSpec()

@@ -13,15 +13,19 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, read_checkpoint, save_atomic
 from tangle_drake.tangle_cnn.model import TangleModel, load_tangle_model
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
-from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
+from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION, Normalisation
+from tangle_drake.tangle_cnn.target_mask import TargetMask
 
 CONFIG = NetworkConfig(input_size=48)
 CROP = CropSpec(0.06, 48)
+MASKED = Normalisation(target_mask=TargetMask((9, 36)))
+MASKED_CONFIG = NetworkConfig(input_size=48, input_channels=2)
 
 
-def make_checkpoint(seed: int = 0, config: NetworkConfig = CONFIG) -> dict:
+def make_checkpoint(seed: int = 0, config: NetworkConfig = CONFIG,
+                    normalisation: Normalisation = DEFAULT_NORMALISATION) -> dict:
     torch.manual_seed(seed)
-    return model_checkpoint(config, CROP, DEFAULT_NORMALISATION, TangleNet(config).state_dict(),
+    return model_checkpoint(config, CROP, normalisation, TangleNet(config).state_dict(),
                             part="u_hook", metrics={"val_loss": 0.1})
 
 
@@ -39,11 +43,15 @@ def random_crops(count: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     return crops.astype(np.float32), depths
 
 
-def test_round_trip_reproduces_the_outputs_exactly(checkpoint_path):
-    data = make_checkpoint()
-    network = TangleNet(CONFIG)
+@pytest.mark.parametrize(("config", "normalisation"), [(CONFIG, DEFAULT_NORMALISATION),
+                                                       (MASKED_CONFIG, MASKED)])
+def test_round_trip_reproduces_the_outputs_exactly(tmp_path, config, normalisation):
+    data = make_checkpoint(config=config, normalisation=normalisation)
+    checkpoint_path = tmp_path / "model.pt"
+    save_atomic(data, checkpoint_path)
+    network = TangleNet(config)
     network.load_state_dict(data["state_dict"])
-    in_memory = TangleModel(network, CROP, DEFAULT_NORMALISATION)
+    in_memory = TangleModel(network, CROP, normalisation)
     loaded = load_tangle_model(checkpoint_path)
     crops, depths = random_crops(7)
     p = loaded.predict(crops, depths)
@@ -51,7 +59,7 @@ def test_round_trip_reproduces_the_outputs_exactly(checkpoint_path):
     assert np.array_equal(p, in_memory.predict(crops, depths))
     assert np.array_equal(p, load_tangle_model(checkpoint_path).predict(crops, depths))
     assert ((p > 0) & (p < 1)).all()
-    assert loaded.crop == CROP and loaded.normalisation == DEFAULT_NORMALISATION
+    assert loaded.crop == CROP and loaded.normalisation == normalisation
     assert loaded.info["part"] == "u_hook" and "state_dict" not in loaded.info
 
 
@@ -137,6 +145,9 @@ def edited(**changes) -> dict:
     (edited(crop={"size_m": 0.06, "size_px": 96}), "does not fit the network"),
     (edited(crop={"size_m": 0.06}), "invalid crop spec"),
     (edited(normalisation={"below_m": -1.0}), "invalid crop spec or normalisation"),
+    (edited(normalisation=MASKED.to_dict()), "makes 2 input channel"),
+    (edited(normalisation={**MASKED.to_dict(), "target_mask": {"box_px": 5}}),
+     "invalid crop spec or normalisation"),
 ])
 def test_mismatched_checkpoints(tmp_path, data, message):
     with pytest.raises(TangleDrakeError, match=message):

@@ -13,7 +13,8 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, save_atomic
 from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
-from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
+from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION, Normalisation
+from tangle_drake.tangle_cnn.target_mask import TargetMask
 
 onnx = pytest.importorskip("onnx")
 onnxruntime = pytest.importorskip("onnxruntime")
@@ -27,11 +28,28 @@ def run_export(*argv: str) -> int:
     return args.func(args)
 
 
-def test_onnx_runtime_agrees_with_torch(tmp_path, capsys):
+def wire_crops(depths: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Crops of a few random 6 mm bars at random heights: target masks of many pixels."""
+    crops = np.repeat(depths[:, None, None] + 0.02, 64, 1).repeat(64, 2).astype(np.float32)
+    rows, cols = np.mgrid[:64, :64]
+    for crop, depth in zip(crops, depths, strict=True):
+        for _ in range(4):
+            angle, offset = rng.uniform(0, np.pi), rng.uniform(-20, 20)
+            distance = np.abs(np.cos(angle) * (rows - 32) - np.sin(angle) * (cols - 32) - offset)
+            top = depth - rng.uniform(0.0, 0.015)
+            rounded = 0.001 * (3 - np.sqrt(np.maximum(9 - distance**2, 0)))
+            bar = np.where(distance < 3, top + rounded, np.inf)
+            np.minimum(crop, bar.astype(np.float32), out=crop)
+    return crops
+
+
+@pytest.mark.parametrize("normalisation", [DEFAULT_NORMALISATION,
+                                           Normalisation(target_mask=TargetMask((10, 36)))])
+def test_onnx_runtime_agrees_with_torch(tmp_path, capsys, normalisation):
     torch.manual_seed(3)
-    config = NetworkConfig(input_size=64)
+    config = NetworkConfig(input_size=64, input_channels=normalisation.channels)
     model_path = tmp_path / "model.pt"
-    save_atomic(model_checkpoint(config, CropSpec(0.08, 64), DEFAULT_NORMALISATION,
+    save_atomic(model_checkpoint(config, CropSpec(0.08, 64), normalisation,
                                  TangleNet(config).state_dict(), part="u_hook"), model_path)
     out = tmp_path / "export" / "model.onnx"
     assert run_export("--model", str(model_path), "--out", str(out)) == 0
@@ -43,15 +61,19 @@ def test_onnx_runtime_agrees_with_torch(tmp_path, capsys):
     rng = np.random.default_rng(0)
     for count in (1, 5, 33):  # the batch dimension is dynamic
         depths = rng.uniform(0.4, 1.6, count).astype(np.float32)
-        crops = (depths[:, None, None] + rng.uniform(-0.1, 0.05, (count, 64, 64))) \
-            .astype(np.float32)
-        (p_onnx,) = session.run(["p_not_tangled"], {"crops": crops, "grasp_depths": depths})
+        crops = wire_crops(depths, rng)
+        feed = {"crops": crops, "grasp_depths": depths}
+        if normalisation.target_mask is not None:
+            feed["target_masks"] = normalisation.masks(crops, depths)
+            assert feed["target_masks"].sum(axis=(1, 2)).min() > 50  # not the seed alone
+        assert [i.name for i in session.get_inputs()] == list(feed)
+        (p_onnx,) = session.run(["p_not_tangled"], feed)
         assert p_onnx.shape == (count,)
         assert np.abs(p_onnx - model.predict(crops, depths)).max() < 1e-5
 
     metadata = {prop.key: prop.value for prop in onnx.load(str(out)).metadata_props}
     assert json.loads(metadata["tangle_drake.crop"]) == {"size_m": 0.08, "size_px": 64}
-    assert json.loads(metadata["tangle_drake.normalisation"])["scale_m"] == 0.04
+    assert json.loads(metadata["tangle_drake.normalisation"]) == normalisation.to_dict()
     assert json.loads(metadata["tangle_drake.part"]) == "u_hook"
 
 

@@ -1,4 +1,5 @@
-"""Tangle CNN building blocks: split, balance, augmentation, metrics, normalisation, crops."""
+"""Tangle CNN building blocks: split, balance, augmentation, metrics, normalisation, target
+mask, crops."""
 
 from itertools import product
 from types import SimpleNamespace
@@ -10,11 +11,13 @@ import torch
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.crops import DEFAULT_CROP, CropSpec, candidate_crops, extract_crop
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.tangle_cnn.augment import augment_batch, dihedral
 from tangle_drake.tangle_cnn.metrics import binary_metrics, roc_auc
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet, parameter_count
-from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
+from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION, Normalisation
 from tangle_drake.tangle_cnn.split import split_by_pile, undersample
+from tangle_drake.tangle_cnn.target_mask import TargetMask
 
 
 def test_split_keeps_every_pile_on_one_side_and_is_seeded():
@@ -93,6 +96,52 @@ def test_normalisation_is_height_above_the_fingertips_whatever_the_camera_height
                           torch.from_numpy(near))
 
 
+def wire(size: int, axis: int, at: int, top: float, radius_px: float = 3.0) -> np.ndarray:
+    """Heights (m, 1 mm pixels) of a round wire along ``axis`` at row/column ``at``; -inf off it."""
+    d = np.abs(np.arange(size) - at).astype(np.float32)
+    profile = np.where(d <= radius_px, top - 0.001 * (radius_px - np.sqrt(
+        np.maximum(radius_px**2 - d**2, 0))), -np.inf).astype(np.float32)
+    return np.repeat(profile[:, None], size, 1) if axis == 0 else \
+        np.repeat(profile[None, :], size, 0)
+
+
+def test_target_mask_follows_the_part_under_the_fingers_and_stops_at_its_neighbours():
+    floor = np.full((48, 48), -0.02, np.float32)
+    target = wire(48, 0, 24, 0.0)  # along the closing direction, through the centre
+    below = wire(48, 1, 8, -0.014)  # lies on the floor, under the target
+    over = wire(48, 1, 44, 0.006)  # lies across the target, outside the closing region
+    heights = np.maximum.reduce([floor, target, below, over])
+    mask = TargetMask((5, 20)).apply(heights[None])[0]
+    assert mask.dtype == np.float32 and set(np.unique(mask)) == {0.0, 1.0}
+    assert mask[24, :41].all()  # the target's top, over the part below, up to the one above
+    assert not mask[:, 41:].any()  # the part over it
+    assert not mask[:19, 8].any() and not mask[30:, 8].any()  # the part below it
+    assert not mask[:20].any() and not mask[29:].any()  # the floor
+    assert np.flatnonzero(mask.any(axis=1)).tolist() == [22, 23, 24, 25, 26]  # its rounded top
+    empty = TargetMask((5, 20)).apply(floor[None])[0]  # a closing region over bare floor
+    assert empty.sum() == 1  # the seed alone: the fill never spreads over the floor
+
+
+def test_target_mask_fits_the_hand_and_feeds_a_second_channel():
+    assert TargetMask.for_hand(DEFAULT_CROP, DEFAULT_GRIPPER).box_px == (11, 43)
+    normalisation = Normalisation(target_mask=TargetMask((5, 20)))
+    assert normalisation.channels == 2 and DEFAULT_NORMALISATION.channels == 1
+    depths = np.array([0.79, 0.81], np.float32)
+    target = np.maximum(wire(48, 0, 24, 0.0), -0.02)
+    crops = depths[:, None, None] - np.stack([target, np.roll(target, 2, axis=0)])
+    x = normalisation.inputs(crops, depths)
+    assert x.shape == (2, 2, 48, 48) and x.dtype == np.float32
+    assert np.allclose(x[:, 0], DEFAULT_NORMALISATION.apply(crops, depths))
+    assert np.array_equal(x[:, 1], normalisation.masks(crops, depths))
+    assert x[0, 1, 24].all() and x[1, 1, 26].all() and not x[0, 1, 28].any()
+    assert np.array_equal(DEFAULT_NORMALISATION.inputs(crops, depths)[:, 0], x[:, 0])
+    assert Normalisation.from_dict(normalisation.to_dict()) == normalisation
+    older = {"below_m": 0.02, "above_m": 0.06, "scale_m": 0.04}  # checkpoints before the mask
+    assert Normalisation.from_dict(older) == DEFAULT_NORMALISATION
+    with pytest.raises(ValueError, match="positive"):
+        TargetMask((0, 20))
+
+
 def test_network_shapes_and_size():
     network = TangleNet()
     assert network(torch.zeros(5, 1, 96, 96)).shape == (5, 2)
@@ -102,6 +151,10 @@ def test_network_shapes_and_size():
         NetworkConfig(input_size=16)
     config = NetworkConfig(input_size=64, channels=(8, 8, 8, 8, 8), hidden=(16, 8))
     assert NetworkConfig.from_dict(config.to_dict()) == config
+    two = NetworkConfig(input_size=32, input_channels=2)
+    assert TangleNet(two)(torch.zeros(2, 2, 32, 32)).shape == (2, 2)
+    older = {key: value for key, value in two.to_dict().items() if key != "input_channels"}
+    assert NetworkConfig.from_dict(older).input_channels == 1
 
 
 def test_candidate_crops_match_extract_crop_on_the_whole_image():

@@ -14,6 +14,7 @@ from tangle_drake.commands import train as train_command
 from tangle_drake.crops import CropSpec
 from tangle_drake.dataset import write_manifest, write_shard
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.tangle_cnn import train as train_module
 from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
 from tangle_drake.tangle_cnn.model import load_tangle_model
@@ -23,6 +24,7 @@ from tangle_drake.tangle_cnn.synthetic import (
     synthetic_samples,
     write_synthetic_dataset,
 )
+from tangle_drake.tangle_cnn.target_mask import TargetMask
 from tangle_drake.tangle_cnn.train import TrainSettings, log_path, state_path, train
 
 
@@ -86,7 +88,10 @@ def test_train_cli_writes_checkpoint_and_log_and_resumes_after_an_interrupt(
     assert checkpoint["part"] == "synthetic_bars"
     assert checkpoint["crop"] == {"size_m": 0.05, "size_px": 32}
     assert checkpoint["network"]["input_size"] == 32
-    assert checkpoint["normalisation"] == {"below_m": 0.02, "above_m": 0.06, "scale_m": 0.04}
+    assert checkpoint["normalisation"] == {
+        "below_m": 0.02, "above_m": 0.06, "scale_m": 0.04,
+        "target_mask": TargetMask.for_hand(CropSpec(0.05, 32), DEFAULT_GRIPPER).to_dict()}
+    assert checkpoint["network"]["input_channels"] == 2
     assert checkpoint["gripper"]["max_opening"] > 0
     assert checkpoint["training"]["seed"] == 5 and checkpoint["training"]["augment"] == "d4"
     data = checkpoint["data"]
@@ -118,6 +123,18 @@ def test_train_cli_writes_checkpoint_and_log_and_resumes_after_an_interrupt(
 
     with pytest.raises(TangleDrakeError, match=r"training\.lr.*--restart"):
         run_train(*args, "--lr", "0.01")
+    with pytest.raises(TangleDrakeError, match=r"training\.target_mask.*--restart"):
+        run_train(*args, "--no-target-mask")
+
+
+def test_no_target_mask_trains_on_the_depth_crop_alone(dataset, tmp_path):
+    out = tmp_path / "plain.pt"
+    assert run_train("--data", str(dataset), "--out", str(out), "--epochs", "1",
+                     "--augment", "none", "--device", "cpu", "--no-target-mask") == 0
+    model = load_tangle_model(out)
+    assert model.normalisation.target_mask is None
+    assert model.network.config.input_channels == 1
+    assert model.info["training"]["target_mask"] is False
 
 
 def test_early_stopping_and_nothing_left_to_do(dataset, tmp_path):

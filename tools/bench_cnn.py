@@ -1,8 +1,9 @@
 """Benchmark the tangle CNN on this machine's CPU: scoring one image, and training throughput.
 
-Inference: the 5 grasp candidates of one 640x480 depth image, crop extraction + normalisation +
-forward pass (``TangleModel.predict_candidates``), on one CPU core; median and p95 over
-``--runs``. Target: at most 5 ms.
+Inference: the 5 grasp candidates of one 640x480 depth image, crop extraction + normalisation
+(with the target mask, as ``tangle-drake train`` makes models by default) + forward pass
+(``TangleModel.predict_candidates``), on one CPU core; median and p95 over ``--runs``.
+Target: at most 5 ms.
 
 Training: one epoch of ``tangle-drake train``'s own loop on a synthetic dataset of 96 px
 crops, in samples per second, and from it the time of a paper-sized training: 5,100 samples,
@@ -31,11 +32,13 @@ import torch
 
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.crops import DEFAULT_CROP, candidate_crops
+from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
 from tangle_drake.tangle_cnn.model import TangleModel, load_tangle_model
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet, parameter_count
-from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
+from tangle_drake.tangle_cnn.normalise import Normalisation
 from tangle_drake.tangle_cnn.synthetic import write_synthetic_dataset
+from tangle_drake.tangle_cnn.target_mask import TargetMask
 from tangle_drake.tangle_cnn.train import TrainSettings, train
 
 PAPER_TRAIN = 4590 * 8
@@ -119,8 +122,11 @@ def main() -> None:
         model = load_tangle_model(args.model)
     else:
         torch.manual_seed(0)
-        model = TangleModel(TangleNet(NetworkConfig(input_size=DEFAULT_CROP.size_px)),
-                            DEFAULT_CROP, DEFAULT_NORMALISATION)
+        normalisation = Normalisation(target_mask=TargetMask.for_hand(DEFAULT_CROP,
+                                                                      DEFAULT_GRIPPER))
+        config = NetworkConfig(input_size=DEFAULT_CROP.size_px,
+                               input_channels=normalisation.channels)
+        model = TangleModel(TangleNet(config), DEFAULT_CROP, normalisation)
     count = parameter_count(model.network)
     print(f"network: {count} parameters, {count * 4 / 1e6:.2f} MB of float32 weights; load "
           f"average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")

@@ -12,7 +12,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "train", help="train the tangle CNN on a dataset from `tangle-drake collect`",
         description="Train the tangle CNN: 90/10 split by pile, classes balanced by "
                     "undersampling the majority class, x8 rotation/flip augmentation, early "
-                    "stopping on the validation loss. Writes OUT (best weights and the "
+                    "stopping on the validation loss. The network sees the depth crop and a "
+                    "mask of the target part's pixels (--no-target-mask: the crop alone, as "
+                    "in the paper). Writes OUT (best weights and the "
                     "configuration that made them), OUT's .state.pt (to resume) and .log.json "
                     "(per-epoch metrics). An interrupted run (Ctrl-C) continues from its last "
                     "finished epoch when the same command is run again.")
@@ -36,6 +38,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--augment", choices=tuple(AUGMENTATIONS), default=default.augment,
                         help="d4 (default): the paper's x8, 4 rotations x mirror (the 90-degree "
                              "ones turn the closing direction vertical); none")
+    parser.add_argument("--no-target-mask", dest="target_mask", action="store_false",
+                        help="train on the depth crop alone (the paper's input), without the "
+                             "channel marking the target part")
     parser.add_argument("--device", choices=("auto", "cpu", "cuda"), default="auto",
                         help="auto: CUDA when available, else the CPU")
     parser.add_argument("--restart", action="store_true",
@@ -49,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
     from tangle_drake.tangle_cnn.train import TrainSettings, state_path, train
 
     settings = TrainSettings(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
-                             seed=args.seed, patience=args.patience, augment=args.augment)
+                             seed=args.seed, patience=args.patience, augment=args.augment,
+                             target_mask=args.target_mask)
     try:
         metrics = train(args.data, args.out, settings, device=args.device,
                         restart=args.restart, log=tqdm.write)

@@ -8,7 +8,8 @@ to pick one candidate, and a Drake system that does both.
 Modules import torch only where they need it, so ``selection`` stays numpy-only and this
 package's import is cheap:
 
-- ``network``: the layers; ``normalise``: depth crop -> network input;
+- ``network``: the layers; ``normalise``: depth crop -> network input; ``target_mask``: the
+  input's second channel, the target part's pixels;
 - ``augment``, ``split``, ``metrics``, ``training_data``, ``train``: training;
 - ``checkpoint``: the file format; ``model``: ``load_tangle_model`` and ``TangleModel``;
 - ``selection``: graspability / cnn / harmonic / random rules;

@@ -15,7 +15,7 @@ key            meaning
 kind, version  ``MODEL_KIND``, ``FORMAT_VERSION``
 network        ``NetworkConfig.to_dict()``
 crop           the crop spec the data was made with: ``{"size_m", "size_px"}``
-normalisation  ``Normalisation.to_dict()``
+normalisation  ``Normalisation.to_dict()`` (with the target mask's spec, or ``None``)
 gripper        the gripper spec of the data (the manifest's, else the default), dict
 part           the part name from the data manifest (``None`` if it had none)
 data           data summary: path, fingerprint, counts, split sizes, manifest

@@ -26,6 +26,10 @@ class TangleModel:
         if crop.size_px != network.config.input_size:
             raise TangleDrakeError(f"crop of {crop.size_px} px does not fit the network's "
                                    f"{network.config.input_size} px input")
+        if normalisation.channels != network.config.input_channels:
+            raise TangleDrakeError(f"the normalisation makes {normalisation.channels} input "
+                                   f"channel(s), the network takes "
+                                   f"{network.config.input_channels}")
         self.network = network.eval()
         self.crop = crop
         self.normalisation = normalisation
@@ -47,7 +51,7 @@ class TangleModel:
                                    "missing pixels)")
         if len(crops) == 0:
             return np.zeros(0, dtype=np.float32)
-        x = torch.from_numpy(self.normalisation.apply(crops, grasp_depths)).unsqueeze(1)
+        x = torch.from_numpy(self.normalisation.inputs(crops, grasp_depths))
         with torch.inference_mode():
             return torch.softmax(self.network(x), dim=1)[:, 0].numpy()
 
@@ -66,8 +70,8 @@ def load_tangle_model(path: Path | str) -> TangleModel:
     network = network_from(data["network"], data["state_dict"], path)
     try:
         crop = CropSpec(float(data["crop"]["size_m"]), int(data["crop"]["size_px"]))
-        normalisation = Normalisation(**data["normalisation"])
-    except (TypeError, KeyError, ValueError) as error:
+        normalisation = Normalisation.from_dict(data["normalisation"])
+    except (TypeError, KeyError, ValueError, AttributeError) as error:
         raise TangleDrakeError(f"{path}: invalid crop spec or normalisation: {error}") from None
     try:
         return TangleModel(network, crop, normalisation,

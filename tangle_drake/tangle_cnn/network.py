@@ -27,6 +27,9 @@ class NetworkConfig:
 
     input_size: int = 96
     """Side of the square crop, pixels (the crop spec's ``size_px``)."""
+    input_channels: int = 1
+    """Channels of the input: the heights, and the target mask when the normalisation has
+    one (``Normalisation.channels``)."""
     channels: tuple[int, int, int, int, int] = (16, 32, 64, 64, 64)
     """Output channels of conv1..conv5."""
     hidden: tuple[int, int] = (256, 64)
@@ -37,7 +40,7 @@ class NetworkConfig:
     def __post_init__(self) -> None:
         if len(self.channels) != 5 or len(self.hidden) != 2:
             raise ValueError("NetworkConfig needs 5 channel counts and 2 hidden widths")
-        if min(*self.channels, *self.hidden) < 1:
+        if min(*self.channels, *self.hidden, self.input_channels) < 1:
             raise ValueError("NetworkConfig channel counts and widths must be positive")
         if not 0 <= self.dropout < 1:
             raise ValueError(f"NetworkConfig.dropout must be in [0, 1), got {self.dropout}")
@@ -64,7 +67,7 @@ class NetworkConfig:
 
 
 class TangleNet(nn.Module):
-    """Normalised crop (N, 1, S, S) -> class logits (N, 2): [not tangled, tangled]."""
+    """Network input (N, C, S, S) -> class logits (N, 2): [not tangled, tangled]."""
 
     def __init__(self, config: NetworkConfig = NetworkConfig()) -> None:
         super().__init__()
@@ -72,7 +75,7 @@ class TangleNet(nn.Module):
         c1, c2, c3, c4, c5 = config.channels
         h1, h2 = config.hidden
         self.features = nn.Sequential(
-            *_conv(1, c1, _CONV1), nn.MaxPool2d(2),
+            *_conv(config.input_channels, c1, _CONV1), nn.MaxPool2d(2),
             *_conv(c1, c2, _CONV2), nn.MaxPool2d(2),
             *_conv(c2, c3, _CONV345),
             *_conv(c3, c4, _CONV345),

@@ -4,7 +4,10 @@ The ONNX graph takes what ``TangleModel.predict`` takes and returns what it retu
 inputs ``crops`` (N, S, S) float32 metric crops and ``grasp_depths`` (N,) float32 fingertip
 depths, output ``p_not_tangled`` (N,); N is dynamic. The normalisation is inside the graph,
 and the crop spec and normalisation are in the model's metadata (``tangle_drake.*`` keys), so
-the file alone says how to cut its input. Needs the ``onnx`` extra (onnx, onnxscript;
+the file alone says how to cut its input. A model with a target mask (``target_mask.py``)
+takes a third input, ``target_masks`` (N, S, S) float32: the flood fill is not an ONNX
+operator, so the caller computes it (``Normalisation.masks``; its spec is in the
+``tangle_drake.normalisation`` metadata). Needs the ``onnx`` extra (onnx, onnxscript;
 onnxruntime to check the result).
 """
 
@@ -25,6 +28,7 @@ from tangle_drake.tangle_cnn.normalise import Normalisation
 
 OPSET = 18
 INPUTS = ("crops", "grasp_depths")
+MASK_INPUT = "target_masks"
 OUTPUT = "p_not_tangled"
 
 
@@ -37,8 +41,24 @@ class _ProbabilityGraph(nn.Module):
         self.normalisation = normalisation
 
     def forward(self, crops: torch.Tensor, grasp_depths: torch.Tensor) -> torch.Tensor:
-        x = self.normalisation.apply(crops, grasp_depths).unsqueeze(1)
+        return self.probability(self.normalisation.apply(crops, grasp_depths).unsqueeze(1))
+
+    def probability(self, x: torch.Tensor) -> torch.Tensor:
         return torch.softmax(self.network(x), dim=1)[:, 0]
+
+
+class _MaskedProbabilityGraph(_ProbabilityGraph):
+    """The same with the target mask as a second channel, computed outside the graph."""
+
+    def forward(self, crops: torch.Tensor, grasp_depths: torch.Tensor,  # type: ignore[override]
+                target_masks: torch.Tensor) -> torch.Tensor:
+        height = self.normalisation.apply(crops, grasp_depths)
+        return self.probability(torch.stack([height, target_masks], dim=1))
+
+
+def input_names(model: TangleModel) -> tuple[str, ...]:
+    """The ONNX graph's inputs for ``model``, in order."""
+    return INPUTS if model.normalisation.target_mask is None else (*INPUTS, MASK_INPUT)
 
 
 def export_onnx(model: TangleModel, out: Path) -> None:
@@ -49,17 +69,20 @@ def export_onnx(model: TangleModel, out: Path) -> None:
         raise TangleDrakeError("ONNX export needs the onnx extra: pip install "
                                "'tangle_drake[onnx]'") from None
     size = model.crop.size_px
-    example = (torch.zeros(2, size, size), torch.zeros(2))
+    names = input_names(model)
+    example = tuple(torch.zeros(2, size, size) if name != "grasp_depths" else torch.zeros(2)
+                    for name in names)
     batch = torch.export.Dim("batch")
-    graph = _ProbabilityGraph(model.network, model.normalisation).eval()
+    kind = _ProbabilityGraph if model.normalisation.target_mask is None else \
+        _MaskedProbabilityGraph
+    graph = kind(model.network, model.normalisation).eval()
     try:
         with warnings.catch_warnings():  # torch-internal notices, nothing a user can act on
             warnings.filterwarnings("ignore", message=".*LeafSpec", category=FutureWarning)
             warnings.filterwarnings("ignore", message=".*axis name: batch will not be used")
             program = torch.onnx.export(
-                graph, example, dynamo=True, opset_version=OPSET, input_names=list(INPUTS),
-                output_names=[OUTPUT], dynamic_shapes={"crops": {0: batch},
-                                                       "grasp_depths": {0: batch}},
+                graph, example, dynamo=True, opset_version=OPSET, input_names=list(names),
+                output_names=[OUTPUT], dynamic_shapes={name: {0: batch} for name in names},
                 external_data=False, verbose=False)
     except ImportError as error:
         raise TangleDrakeError(f"ONNX export needs the onnx extra ({error}): pip install "
@@ -87,5 +110,8 @@ def onnx_disagreement(model: TangleModel, onnx_path: Path, samples: int = 64,
     crops = (depths[:, None, None] + rng.uniform(-0.08, 0.04, (samples, size, size))) \
         .astype(np.float32)
     session = onnxruntime.InferenceSession(str(onnx_path), providers=["CPUExecutionProvider"])
-    (p_onnx,) = session.run([OUTPUT], {"crops": crops, "grasp_depths": depths})
+    feed = {"crops": crops, "grasp_depths": depths}
+    if model.normalisation.target_mask is not None:
+        feed[MASK_INPUT] = model.normalisation.masks(crops, depths)
+    (p_onnx,) = session.run([OUTPUT], feed)
     return float(np.abs(p_onnx - model.predict(crops, depths)).max())

@@ -82,11 +82,16 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
     out = Path(out)
     dev = resolve_device(device)
     data = load_training_data(data_dir, normalisation, settings.validation_fraction,
-                              settings.seed)
-    config = network or NetworkConfig(input_size=data.crop.size_px)
+                              settings.seed, target_mask=settings.target_mask)
+    normalisation = data.normalisation
+    config = network or NetworkConfig(input_size=data.crop.size_px,
+                                      input_channels=normalisation.channels)
     if config.input_size != data.crop.size_px:
         raise TangleDrakeError(f"network input {config.input_size} px does not match the "
                                f"data's {data.crop.size_px} px crops")
+    if config.input_channels != normalisation.channels:
+        raise TangleDrakeError(f"network input of {config.input_channels} channel(s) does not "
+                               f"match the {normalisation.channels} the inputs have")
     torch.manual_seed(settings.seed)
     net = TangleNet(config).to(dev)
     optimiser = torch.optim.Adam(net.parameters(), lr=settings.lr)
@@ -172,7 +177,7 @@ def _run_epoch(net: TangleNet, optimiser: torch.optim.Optimizer, data: TrainingD
             rows = data.train[pairs // transforms]
             x = augment_batch(data.inputs[torch.from_numpy(rows)], pairs % transforms)
             y = torch.from_numpy(data.labels[rows]).to(dev)
-            logits = net(x.unsqueeze(1).to(dev))
+            logits = net(x.to(dev))
             loss = nn.functional.cross_entropy(logits, y)
             optimiser.zero_grad()
             loss.backward()
@@ -191,7 +196,7 @@ def evaluate(net: TangleNet, inputs: torch.Tensor, labels: np.ndarray, indices: 
     with torch.inference_mode():
         for first in range(0, len(indices), EVAL_BATCH):
             rows = torch.from_numpy(indices[first:first + EVAL_BATCH])
-            logits = net(inputs[rows].unsqueeze(1).to(dev))
+            logits = net(inputs[rows].to(dev))
             y = torch.from_numpy(labels[rows.numpy()]).to(dev)
             total_loss += float(nn.functional.cross_entropy(logits, y, reduction="sum"))
             p_tangled.append(torch.softmax(logits, 1)[:, 1].cpu().numpy())

@@ -26,6 +26,9 @@ class TrainSettings:
     validation parts is noisy, and learning starts slowly from He initialisation)."""
     augment: str = "d4"
     validation_fraction: float = 0.1
+    target_mask: bool = True
+    """Give the network a second channel marking the target part's pixels
+    (:mod:`.target_mask`); ``False`` trains on the paper's plain depth crop."""
 
     def __post_init__(self) -> None:
         if self.augment not in AUGMENTATIONS:

@@ -9,7 +9,7 @@ Every problem with the data is a ``TangleDrakeError`` naming the directory.
 from __future__ import annotations
 
 import hashlib
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -18,9 +18,10 @@ import torch
 from tangle_drake.crops import CropSpec
 from tangle_drake.dataset import load_samples, read_manifest
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.tangle_cnn.normalise import Normalisation
 from tangle_drake.tangle_cnn.split import split_by_pile, undersample
+from tangle_drake.tangle_cnn.target_mask import TargetMask
 
 FIELDS = ("crop", "label", "depth_m", "pile_seed")
 
@@ -30,7 +31,7 @@ class TrainingData:
     """All samples' network inputs and labels, and which of them train and validate."""
 
     inputs: torch.Tensor
-    """(N, S, S) normalised crops, float32, on the CPU."""
+    """(N, C, S, S) network inputs (``Normalisation.inputs``), float32, on the CPU."""
     labels: np.ndarray
     """(N,) int64, 1 = tangled."""
     train: np.ndarray
@@ -38,6 +39,9 @@ class TrainingData:
     validation: np.ndarray
     """Indices of the validation part (the other piles, classes balanced)."""
     crop: CropSpec
+    normalisation: Normalisation
+    """The normalisation the inputs were made with (its target mask fitted to the data's
+    crop and gripper)."""
     gripper: dict
     part: str | None
     summary: dict
@@ -45,8 +49,10 @@ class TrainingData:
 
 
 def load_training_data(directory: Path, normalisation: Normalisation,
-                       validation_fraction: float, seed: int) -> TrainingData:
-    """Load ``directory``, split it by pile with ``seed`` and undersample each part's classes."""
+                       validation_fraction: float, seed: int,
+                       target_mask: bool = False) -> TrainingData:
+    """Load ``directory``, split it by pile with ``seed`` and undersample each part's classes;
+    with ``target_mask``, the inputs get the target-mask channel for the data's hand."""
     directory = Path(directory)
     manifest = read_manifest(directory)
     samples = load_samples(directory, FIELDS)
@@ -79,6 +85,14 @@ def load_training_data(directory: Path, normalisation: Normalisation,
         if len(part) == 0:
             raise TangleDrakeError(f"dataset {directory}: the {name} piles hold only one class; "
                                    "collect more piles")
+    gripper = manifest.get("gripper", asdict(DEFAULT_GRIPPER))
+    if target_mask:
+        try:
+            hand = GripperSpec.from_dict(gripper)
+        except (TypeError, ValueError, AttributeError) as error:
+            raise TangleDrakeError(f"dataset {directory}: invalid gripper in the manifest: "
+                                   f"{error}") from None
+        normalisation = replace(normalisation, target_mask=TargetMask.for_hand(crop, hand))
     summary = {
         "path": str(directory),
         "fingerprint": _fingerprint(samples),
@@ -92,10 +106,10 @@ def load_training_data(directory: Path, normalisation: Normalisation,
         "manifest": manifest,
     }
     return TrainingData(
-        inputs=torch.from_numpy(normalisation.apply(crops, depths).astype(np.float32, copy=False)),
+        inputs=torch.from_numpy(normalisation.inputs(crops, depths)),
         labels=labels, train=train, validation=validation, crop=crop,
-        gripper=manifest.get("gripper", asdict(DEFAULT_GRIPPER)),
-        part=manifest.get("part"), summary=summary)
+        normalisation=normalisation, gripper=gripper, part=manifest.get("part"),
+        summary=summary)
 
 
 def _crop_spec(manifest: dict, size_px: int, directory: Path) -> CropSpec:
