@@ -3,7 +3,7 @@ network, described truthfully by the model card."""
 
 import importlib.util
 import json
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +15,7 @@ from tangle_drake.parts.catalog import BUILTIN_PARTS
 from tangle_drake.pick.selection import TRAINED_DIR, resolve_tangle_choice, trained_model_path
 from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
+from tangle_drake.tangle_cnn.target_mask import TargetMask
 
 TOOL = Path(__file__).resolve().parent.parent / "tools" / "make_trained_models.py"
 
@@ -26,7 +27,8 @@ def test_each_built_in_part_ships_a_model_made_for_todays_crop_and_gripper(part)
     info = model.info
     assert info["part"] == part
     assert model.crop == DEFAULT_CROP  # inference crops as the data did
-    assert model.normalisation == DEFAULT_NORMALISATION
+    mask = TargetMask.for_hand(DEFAULT_CROP, DEFAULT_GRIPPER)  # sees which part is the target
+    assert model.normalisation == replace(DEFAULT_NORMALISATION, target_mask=mask)
     assert info["gripper"] == json.loads(json.dumps(asdict(DEFAULT_GRIPPER)))
     assert info["data"]["manifest"]["part"] == part
     assert 0.0 <= info["metrics"]["val_accuracy"] <= 1.0

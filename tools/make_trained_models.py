@@ -2,7 +2,7 @@
 model card (``tangle_drake/trained/README.md``).
 
     python tools/make_trained_models.py                          # every built-in part
-    python tools/make_trained_models.py --parts u_hook --samples 2000
+    python tools/make_trained_models.py --parts u_hook --samples 5100
     python tools/make_trained_models.py --card-only              # rewrite the card only
 
 For each part it runs the project's own commands, so the card's commands reproduce the models:
@@ -23,6 +23,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from tangle_drake.bench.stats import wilson
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts.catalog import BUILTIN_PARTS
 from tangle_drake.pick.selection import TRAINED_DIR
@@ -60,10 +61,13 @@ def card_row(path: Path) -> str:
 
     auc = metrics.get("val_auc")
     tangled = 100 * data["tangled"] / data["samples"]
+    n = data["validation_samples"]
+    low, high = wilson(round(metrics["val_accuracy"] * n), n)
     return (f"| {checkpoint['part']} | {data['samples']} | {tangled:.1f} | {data['piles']} "
-            f"| {data['train_samples']} / {data['validation_samples']} "
+            f"| {data['train_samples']} / {n} "
             f"({data['validation_piles']} piles) | {metrics['epoch']} of {metrics['epochs_run']} "
-            f"| {metrics['val_loss']:.3f} | {pct('val_accuracy')} | {pct('val_precision')} | "
+            f"| {metrics['val_loss']:.3f} | {pct('val_accuracy')} [{100 * low:.0f}, "
+            f"{100 * high:.0f}] | {pct('val_precision')} | "
             f"{pct('val_recall')} | {'n/a' if auc is None else f'{auc:.3f}'} | "
             f"{path.stat().st_size / 1e6:.1f} MB |")
 
@@ -81,7 +85,8 @@ def write_card(parts: list[str]) -> None:
 
 CARD_HEADER = (
     "| part | samples | tangled % | piles | train / validation samples (balanced) "
-    "| epoch chosen | val loss | val accuracy % | precision % (tangled) | recall % (tangled) "
+    "| epoch chosen | val loss | val accuracy % [95 % interval] | precision % (tangled) "
+    "| recall % (tangled) "
     "| ROC-AUC | size |\n" + "|---" * 12 + "|")
 
 CARD_TEMPLATE = """# Shipped tangle models
@@ -91,16 +96,18 @@ III-C), trained on data from the project's own labelling simulator. `tangle-drak
 `tangle-drake bench` use `trained/<part>.pt` by default with the paper's harmonic-mean rule.
 
 Each file is a checkpoint of `tangle-drake train`: the weights and everything that made them
-(network, crop, normalisation, gripper, part, data summary with the dataset's fingerprint,
-training settings, the chosen epoch's validation metrics). The figures below are read from
-the files themselves (`python tools/make_trained_models.py --card-only`).
+(network, crop, normalisation and target mask, gripper, part, data summary with the dataset's
+fingerprint, training settings, the chosen epoch's validation metrics). The figures below are
+read from the files themselves (`python tools/make_trained_models.py --card-only`). The
+network sees two channels: the crop's height above the grasp's fingertips, and a mask of the
+target part (the surface connected to the top of the closing region, `target_mask.py`).
 
 {header}
 {rows}
 
 Validation is on whole piles the model never saw (a 90/10 split by pile), balanced by
-undersampling like the training part, so chance is 50 %. The validation parts are small
-(10-28 samples per class): a 95 % interval on these accuracies is ±13 to ±22 points.
+undersampling like the training part, so chance is 50 %; the interval is Wilson's, over the
+validation samples.
 
 ## How they were made
 
@@ -112,22 +119,35 @@ cp out/trained/PART.pt tangle_drake/trained/PART.pt
 
 with N the samples in the table (`python tools/make_trained_models.py --parts PART
 --samples N` runs all three). The same seed gives the same dataset (the first piles of the
-seed's sequence) and, on the CPU, the same weights.
+seed's sequence) and, on the CPU with the same number of torch threads, the same weights.
 
 ## Limits
 
 - Trained on simulated depth of the simulated gripper's parts in piles of 14-20; a real
   camera's noise and holes, other part sizes or a different gripper are outside what the
   models saw. Retrain for your part with `collect` and `train`.
-- The validation accuracies are far below the 90 % the project aims at, and more data does
-  not fix it: 5,105 U-hook samples (the paper's size, `--samples 5100`) gave 56.9 %, a crop
-  twice as wide 53.3 %. What the CNN can learn is the visible part of the label (two parts in
-  the closing region: ROC-AUC 0.76); the lift's tangles are hardly visible. In 150 re-made
-  U-hook piles, the parts that came up hanging from the lifted target looked, from above,
-  like its other neighbours that stayed: as visible (45 % against 43-44 % of their surface),
-  mostly below it (67 % against 80-83 %), about one in eight of the parts within 1 cm of it.
+- The validation accuracies are below the 90 % the project aims at. What helped: the target
+  mask (which wire will be lifted was invisible to the plain crop: on the 5,105 U-hook
+  samples, validation ROC-AUC 0.51 without it and 0.73-0.76 with it, the same network,
+  split and epochs) and, with the mask, more data (U-hooks: ROC-AUC about 0.62 from 1,000
+  samples, 0.75 from 5,105; without the mask 5x the data changed nothing). A crop twice as
+  wide, without the mask, did not help (53.3 %).
+- The label is not noise: re-running each lift five times with every part moved by ~1 mm and
+  1 degree and the friction changed by up to 10 % (`tangle-drake collect --part u_hook
+  --samples 500 --out DIR --seed 0 --repeat 5`) gave five equal labels in 94 % of 475 U-hook
+  lifts; a predictor that knew the piles in 3-D to a millimetre could reach ~98 % balanced
+  accuracy. What a top view does not show is how the parts interlock below the target: in
+  150 re-made U-hook piles, the parts that came up hanging from the lifted target looked,
+  from above, like its other neighbours that stayed (45 % against 43-44 % of their surface
+  visible, mostly below it: 67 % against 80-83 %). Looking again after a short lift would
+  not reach 90 % either: in 300 U-hook piles, even the true rise of every other part once
+  the target had risen 1 cm (2 cm) separated tangled from clean lifts only to 82 % (85 %)
+  balanced accuracy.
 - The data's candidates come from the plain graspability index, as in the paper; the pick
   diagram adds the grip test, which drops some of them before the CNN scores the rest.
+- The shipped files were trained with one torch thread (`OMP_NUM_THREADS=1`, while the next
+  part's data was being collected); the same command with another thread count gives
+  slightly different weights.
 """
 
 
@@ -135,8 +155,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--parts", nargs="+", default=list(BUILTIN_PARTS),
                         choices=list(BUILTIN_PARTS))
-    parser.add_argument("--samples", type=int, default=1000,
-                        help="samples per part to collect (default 1000)")
+    parser.add_argument("--samples", type=int, default=4000,
+                        help="samples per part to collect (default 4000)")
     parser.add_argument("--data", type=Path, default=Path("data"), help="dataset root")
     parser.add_argument("--work", type=Path, default=Path("out/trained"),
                         help="where training writes its checkpoints, state and logs")
