@@ -129,9 +129,9 @@ seed's sequence) and, on the CPU with the same number of torch threads, the same
 - The validation accuracies are below the 90 % the project aims at. What helped: the target
   mask (which wire will be lifted was invisible to the plain crop: on the 5,105 U-hook
   samples, validation ROC-AUC 0.51 without it and 0.73-0.76 with it, the same network,
-  split and epochs) and, with the mask, more data (U-hooks: ROC-AUC about 0.62 from 1,000
-  samples, 0.75 from 5,105; without the mask 5x the data changed nothing). A crop twice as
-  wide, without the mask, did not help (53.3 %).
+  split and epochs) and, with the mask, more data (U-hooks: ROC-AUC 0.60-0.64 from the first
+  1,000 samples in a throwaway run, 0.75 from all 5,105; without the mask 5x the data changed
+  nothing). A crop twice as wide, without the mask, did not help (53.3 %).
 - The label is not noise: re-running each lift five times with every part moved by ~1 mm and
   1 degree and the friction changed by up to 10 % (`tangle-drake collect --part u_hook
   --samples 500 --out DIR --seed 0 --repeat 5`) gave five equal labels in 94 % of 475 U-hook
