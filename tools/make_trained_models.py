@@ -8,7 +8,7 @@ model card (``tangle_drake/trained/README.md``).
 For each part it runs the project's own commands, so the card's commands reproduce the models:
 
     tangle-drake collect --part P --samples N --out DATA/P --seed 0 --workers W
-    tangle-drake train --data DATA/P --out WORK/P.pt --seed 0
+    OMP_NUM_THREADS=1 tangle-drake train --data DATA/P --out WORK/P.pt --seed 0
 
 then copies ``WORK/P.pt`` (weights and the configuration that made them; not the training
 state) to ``tangle_drake/trained/P.pt``. Both commands resume, so an interrupted run loses
@@ -18,6 +18,7 @@ little: run the same command again. A dataset that already holds ``N`` samples i
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
 import subprocess
 import sys
@@ -32,10 +33,17 @@ from tangle_drake.tangle_cnn.checkpoint import MODEL_KIND, read_checkpoint
 CARD = TRAINED_DIR / "README.md"
 
 
-def run_command(*argv: str) -> None:
+TRAIN_THREADS = "1"
+"""Torch threads of the training runs: the shipped files were made with one, and another
+count gives slightly different weights."""
+
+
+def run_command(*argv: str, env: dict[str, str] | None = None) -> None:
     """``tangle-drake argv...`` in a child process; stop on failure."""
-    print("$ tangle-drake " + " ".join(argv), flush=True)
-    if subprocess.run([sys.executable, "-m", "tangle_drake.cli", *argv]).returncode != 0:
+    print("$ " + "".join(f"{k}={v} " for k, v in (env or {}).items()) + "tangle-drake " +
+          " ".join(argv), flush=True)
+    command = [sys.executable, "-m", "tangle_drake.cli", *argv]
+    if subprocess.run(command, env={**os.environ, **(env or {})}).returncode != 0:
         raise SystemExit(f"tangle-drake {argv[0]} failed")
 
 
@@ -44,7 +52,8 @@ def make_model(part: str, samples: int, data: Path, work: Path, workers: int) ->
     run_command("collect", "--part", part, "--samples", str(samples), "--out",
                 str(data / part), "--seed", "0", "--workers", str(workers))
     checkpoint = work / f"{part}.pt"
-    run_command("train", "--data", str(data / part), "--out", str(checkpoint), "--seed", "0")
+    run_command("train", "--data", str(data / part), "--out", str(checkpoint), "--seed", "0",
+                env={"OMP_NUM_THREADS": TRAIN_THREADS})
     TRAINED_DIR.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(checkpoint, TRAINED_DIR / f"{part}.pt")
     print(f"installed {TRAINED_DIR / part}.pt", flush=True)
@@ -113,7 +122,7 @@ validation samples.
 
 ```bash
 tangle-drake collect --part PART --samples N --out data/PART --seed 0 --workers 2
-tangle-drake train --data data/PART --out out/trained/PART.pt --seed 0
+OMP_NUM_THREADS=1 tangle-drake train --data data/PART --out out/trained/PART.pt --seed 0
 cp out/trained/PART.pt tangle_drake/trained/PART.pt
 ```
 
@@ -145,9 +154,9 @@ seed's sequence) and, on the CPU with the same number of torch threads, the same
   balanced accuracy.
 - The data's candidates come from the plain graspability index, as in the paper; the pick
   diagram adds the grip test, which drops some of them before the CNN scores the rest.
-- The shipped files were trained with one torch thread (`OMP_NUM_THREADS=1`, while the next
-  part's data was being collected); the same command with another thread count gives
-  slightly different weights.
+- The shipped files were trained with one torch thread (`OMP_NUM_THREADS=1`, as above: the
+  tool does the same); another thread count gives slightly different weights. Two threads
+  on two cores that a collection also uses run ~10x slower (OpenMP spin-waiting).
 """
 
 
