@@ -10,7 +10,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "export-onnx", help="export a trained tangle CNN to ONNX",
         description="Write the model of a `tangle-drake train` checkpoint as one ONNX file: "
-                    "inputs crops (N, S, S) metres and grasp_depths (N,), output "
+                    "inputs crops (N, S, S) metres and grasp_depths (N,), and for a model "
+                    "with a target mask (the default of `train`) target_masks (N, S, S), "
+                    "computed outside the graph (tangle_drake.tangle_cnn.target_mask); output "
                     "p_not_tangled (N,), normalisation included. Then compare it with torch on "
                     "random crops (needs onnxruntime). Needs the onnx extra.")
     parser.add_argument("--model", type=Path, required=True, help="checkpoint (.pt)")
