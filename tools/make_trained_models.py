@@ -139,9 +139,10 @@ seed's sequence) and, on the CPU with the same number of torch threads, the same
   mask (which wire will be lifted is not visible in the plain crop). The same commands with
   `train --no-target-mask` on the same data: u_hook 53.9 % (ROC-AUC 0.567), s_hook 56.2 %
   (0.625), c_ring 68.8 % (0.712), j_hook 57.2 % (0.587), e_shape 59.0 % (0.600). With the
-  mask, more data helped too (U-hooks: ROC-AUC 0.60-0.64 from the first 1,000 samples in a
-  throwaway run, 0.75 from all 5,105; without it, 5x the data changed nothing). A crop twice
-  as wide, without the mask, did not help (53.3 %).
+  mask, more data helped up to the paper's size and not beyond (U-hooks: ROC-AUC 0.60-0.64
+  from the first 1,000 samples in a throwaway run, 0.751 from 5,105, 0.719 and 67.9 % from
+  10,002). A crop twice as wide (0.2 m at the same 96 px) did not help, without the mask
+  (53.3 %) or with it (64.8 %, ROC-AUC 0.675, 5,105 U-hook samples).
 - The label is not noise: re-running each lift five times with every part moved by ~1 mm and
   1 degree and the friction changed by up to 10 % (`tangle-drake collect --part u_hook
   --samples 500 --out DIR --seed 0 --repeat 5`) gave five equal labels in 94 % of 475 U-hook
