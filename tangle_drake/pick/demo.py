@@ -123,16 +123,15 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
 
     if meshcat is not None and options.record:
         meshcat.StartRecording(RECORD_FPS, set_visualizations_while_recording=options.meshcat)
-    records = _run(simulator, pick, options.picks, say,
-                   _bin_count(station, simulator, scenario, scenario.pile.total_count))
+    in_bin = _bin_count(station, simulator, scenario, scenario.pile.total_count)
+    records = _run(simulator, pick, options.picks, say, in_bin)
     if meshcat is not None and options.record:
         meshcat.StopRecording()
         meshcat.PublishRecording()
         Path(options.record).parent.mkdir(parents=True, exist_ok=True)
         Path(options.record).write_text(meshcat.StaticHtml())
         say(f"wrote {options.record}")
-    left = parts_in_bin(station, simulator.get_context(), scenario)
-    say(f"{summarize(records)}; {left} of {scenario.pile.total_count} parts left in the bin; "
+    say(f"{summarize(records)}; {in_bin()} left in the bin; "
         f"wall time {time.perf_counter() - start:.0f} s")
     return records
 
@@ -156,12 +155,10 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
         say(f"hardware simulator and controller in this process over {IN_PROCESS_URL}; "
             f"set-up {time.perf_counter() - start:.1f} s; picking {options.picks} part(s)")
         robot = loop.robot
-        records = _run(loop, built[0], options.picks, say,
-                       _bin_count(robot.station, robot.simulator, scenario,
-                                  robot.pile.num_in_bin))
-        left = parts_in_bin(robot.station, robot.simulator.get_context(), scenario)
-        say(f"{summarize(records)}; {left} of {robot.pile.num_in_bin} parts left in the "
-            f"bin; wall time {time.perf_counter() - start:.0f} s")
+        in_bin = _bin_count(robot.station, robot.simulator, scenario, robot.pile.num_in_bin)
+        records = _run(loop, built[0], options.picks, say, in_bin)
+        say(f"{summarize(records)}; {in_bin()} left in the bin; "
+            f"wall time {time.perf_counter() - start:.0f} s")
         return records
 
     url = network_bus_url(scenario, "use --with-hardware-sim to run against the hardware "
@@ -188,9 +185,8 @@ def parts_in_bin(station: Diagram, context: Context, scenario: Scenario) -> int:
 
 def _bin_count(station: Diagram, simulator: Simulator, scenario: Scenario,
                total: int) -> Callable[[], str]:
-    """Simulation only: "N of M parts in the bin" at the time it is called."""
-    return lambda: (f"{parts_in_bin(station, simulator.get_context(), scenario)} of {total} "
-                    "parts in the bin")
+    """Simulation only: "N of M parts" still in the bin at the time it is called."""
+    return lambda: f"{parts_in_bin(station, simulator.get_context(), scenario)} of {total} parts"
 
 
 def _settled_pile(station: Diagram, scenario: Scenario, seed: int | None,
@@ -239,6 +235,6 @@ def _run(simulator: Simulator | HardwareInTheLoop, pick: PickDiagram, picks: int
         simulator.AdvanceTo(context.get_time() + 0.5)
         records = picks_port.Eval(context)
         for record in records[reported:]:
-            say(record.describe() + ("" if in_bin is None else f" | {in_bin()}"))
+            say(record.describe() + ("" if in_bin is None else f" | {in_bin()} in the bin"))
         reported = len(records)
     return list(picks_port.Eval(context))
