@@ -18,6 +18,7 @@ from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.tangle_cnn import train as train_module
 from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
 from tangle_drake.tangle_cnn.model import load_tangle_model
+from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION, Normalisation
 from tangle_drake.tangle_cnn.synthetic import (
     GRASP_DEPTH_M,
     synthetic_crop,
@@ -26,6 +27,7 @@ from tangle_drake.tangle_cnn.synthetic import (
 )
 from tangle_drake.tangle_cnn.target_mask import TargetMask
 from tangle_drake.tangle_cnn.train import TrainSettings, log_path, state_path, train
+from tangle_drake.tangle_cnn.training_data import load_training_data
 
 
 @pytest.fixture(autouse=True)
@@ -125,6 +127,17 @@ def test_train_cli_writes_checkpoint_and_log_and_resumes_after_an_interrupt(
         run_train(*args, "--lr", "0.01")
     with pytest.raises(TangleDrakeError, match=r"training\.target_mask.*--restart"):
         run_train(*args, "--no-target-mask")
+
+
+def test_the_target_mask_setting_alone_decides_the_input_channels(dataset):
+    masked = Normalisation(target_mask=TargetMask((3, 10)))
+    plain = load_training_data(dataset, masked, 0.1, 0, target_mask=False)
+    assert plain.normalisation.target_mask is None and plain.inputs.shape[1] == 1
+    fitted = load_training_data(dataset, DEFAULT_NORMALISATION, 0.1, 0, target_mask=True)
+    assert fitted.normalisation.target_mask == \
+        TargetMask.for_hand(CropSpec(0.05, 32), DEFAULT_GRIPPER)
+    assert fitted.inputs.shape[1] == 2
+    assert torch.equal(fitted.inputs[:, 0], plain.inputs[:, 0])
 
 
 def test_no_target_mask_trains_on_the_depth_crop_alone(dataset, tmp_path):

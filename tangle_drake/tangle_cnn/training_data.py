@@ -52,7 +52,8 @@ def load_training_data(directory: Path, normalisation: Normalisation,
                        validation_fraction: float, seed: int,
                        target_mask: bool = False) -> TrainingData:
     """Load ``directory``, split it by pile with ``seed`` and undersample each part's classes;
-    with ``target_mask``, the inputs get the target-mask channel for the data's hand."""
+    ``target_mask`` alone decides whether the inputs get the target-mask channel (fitted to
+    the data's hand and crop), whatever mask ``normalisation`` held."""
     directory = Path(directory)
     manifest = read_manifest(directory)
     samples = load_samples(directory, FIELDS)
@@ -86,13 +87,8 @@ def load_training_data(directory: Path, normalisation: Normalisation,
             raise TangleDrakeError(f"dataset {directory}: the {name} piles hold only one class; "
                                    "collect more piles")
     gripper = manifest.get("gripper", asdict(DEFAULT_GRIPPER))
-    if target_mask:
-        try:
-            hand = GripperSpec.from_dict(gripper)
-        except (TypeError, ValueError, AttributeError) as error:
-            raise TangleDrakeError(f"dataset {directory}: invalid gripper in the manifest: "
-                                   f"{error}") from None
-        normalisation = replace(normalisation, target_mask=TargetMask.for_hand(crop, hand))
+    normalisation = replace(normalisation, target_mask=_target_mask(gripper, crop, directory)
+                            if target_mask else None)
     summary = {
         "path": str(directory),
         "fingerprint": _fingerprint(samples),
@@ -110,6 +106,16 @@ def load_training_data(directory: Path, normalisation: Normalisation,
         labels=labels, train=train, validation=validation, crop=crop,
         normalisation=normalisation, gripper=gripper, part=manifest.get("part"),
         summary=summary)
+
+
+def _target_mask(gripper: dict, crop: CropSpec, directory: Path) -> TargetMask:
+    """The target mask for the data's hand and crop."""
+    try:
+        hand = GripperSpec.from_dict(gripper)
+    except (TypeError, ValueError, AttributeError) as error:
+        raise TangleDrakeError(f"dataset {directory}: invalid gripper in the manifest: "
+                               f"{error}") from None
+    return TargetMask.for_hand(crop, hand)
 
 
 def _crop_spec(manifest: dict, size_px: int, directory: Path) -> CropSpec:
