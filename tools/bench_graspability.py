@@ -41,8 +41,11 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     cv2.setNumThreads(1)
-    params = GraspabilityParams(n_orientations=args.orientations, cell_size_m=args.cell_size,
-                                max_grip_span_m=args.grip_span)
+    try:
+        params = GraspabilityParams(n_orientations=args.orientations, cell_size_m=args.cell_size,
+                                    max_grip_span_m=args.grip_span)
+    except ValueError as error:
+        parser.error(str(error))
     grip = "off" if args.grip_span is None else f"{args.grip_span * 1e3:g} mm"
     print(f"one core (cv2.setNumThreads(1)), {args.orientations} orientations, "
           f"{args.cell_size * 1e3:g} mm cells, grip test {grip}, "
