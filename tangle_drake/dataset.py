@@ -89,6 +89,20 @@ def finished_tasks(directory: Path) -> set[int]:
     return {int(p.stem.split("_")[1]) for p in directory.glob("shard_*.npz")}
 
 
+def stored_fields(directory: Path) -> set[str]:
+    """The arrays the dataset's shards hold (those of its first shard; empty if none)."""
+    tasks = finished_tasks(Path(directory))
+    if not tasks:
+        return set()
+    path = Path(directory) / shard_name(min(tasks))
+    try:
+        with np.load(path) as shard:
+            return set(shard.files)
+    except (OSError, ValueError) as error:
+        raise TangleDrakeError(f"dataset shard {path} is unreadable ({error}); delete it "
+                               "and resume the collection to redo that task") from error
+
+
 def write_manifest(directory: Path, info: dict) -> None:
     """Write ``manifest.json`` atomically; ``info`` describes what made the data."""
     info = {"format": FORMAT_VERSION, **info}

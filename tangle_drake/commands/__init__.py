@@ -1,4 +1,4 @@
 """One module per ``tangle-drake`` subcommand; each defines ``register(subparsers)``."""
 
 COMMAND_MODULES: tuple[str, ...] = ("demo", "scene", "diagram", "graspability", "collect",
-                                     "train", "export_onnx", "hardware_sim", "bench")
+                                     "train", "evaluate", "export_onnx", "hardware_sim", "bench")

@@ -27,6 +27,16 @@ def roc_auc(labels: np.ndarray, scores: np.ndarray) -> float | None:
     return (rank_sum - n_positive * (n_positive + 1) / 2) / (n_positive * n_negative)
 
 
+def balanced_accuracy(labels: np.ndarray, p_tangled: np.ndarray) -> float | None:
+    """Mean of the two classes' recalls at threshold 0.5: the accuracy on a class-balanced
+    set, without discarding samples of the common class. ``None`` without both classes."""
+    truth = np.asarray(labels).astype(bool)
+    predicted = np.asarray(p_tangled) > 0.5
+    if truth.all() or not truth.any():
+        return None
+    return float((predicted[truth].mean() + (~predicted[~truth]).mean()) / 2)
+
+
 def binary_metrics(labels: np.ndarray, p_tangled: np.ndarray) -> dict[str, float | None]:
     """Accuracy, precision, recall (threshold 0.5, i.e. the softmax's argmax) and ROC-AUC."""
     truth = np.asarray(labels).astype(bool)

@@ -64,7 +64,7 @@ def load_training_data(directory: Path, normalisation: Normalisation,
     if crops.ndim != 3 or crops.shape[1] != crops.shape[2]:
         raise TangleDrakeError(f"dataset {directory}: crops have shape {crops.shape[1:]}, "
                                "not square")
-    crop = _crop_spec(manifest, crops.shape[1], directory)
+    crop = crop_spec(manifest, crops.shape[1], directory)
     if not np.isin(labels, (0, 1)).all():
         raise TangleDrakeError(f"dataset {directory}: labels must be 0 or 1")
     counts = np.bincount(labels, minlength=2)
@@ -91,7 +91,7 @@ def load_training_data(directory: Path, normalisation: Normalisation,
                             if target_mask else None)
     summary = {
         "path": str(directory),
-        "fingerprint": _fingerprint(samples),
+        "fingerprint": fingerprint(samples),
         "samples": len(labels),
         "tangled": int(counts[1]),
         "piles": len(np.unique(piles)),
@@ -118,7 +118,7 @@ def _target_mask(gripper: dict, crop: CropSpec, directory: Path) -> TargetMask:
     return TargetMask.for_hand(crop, hand)
 
 
-def _crop_spec(manifest: dict, size_px: int, directory: Path) -> CropSpec:
+def crop_spec(manifest: dict, size_px: int, directory: Path) -> CropSpec:
     """The manifest's crop spec, checked against the crops' size."""
     info = manifest.get("crop")
     try:
@@ -135,7 +135,7 @@ def _crop_spec(manifest: dict, size_px: int, directory: Path) -> CropSpec:
     return crop
 
 
-def _fingerprint(samples: dict[str, np.ndarray]) -> str:
+def fingerprint(samples: dict[str, np.ndarray]) -> str:
     """SHA-256 of the arrays training reads: a resumed run must see the same data."""
     digest = hashlib.sha256()
     for name in FIELDS:

@@ -1,0 +1,159 @@
+"""A trained tangle CNN against a labelled dataset: how often it is right, and on which picks.
+
+The accuracy in a checkpoint is measured on the validation piles that early stopping watched,
+which flatters the model a little; a dataset collected with another ``--seed`` holds piles the
+model never saw and gives a test figure. On the model's own training data only its validation
+piles are scored (the same balanced subset as the checkpoint's figure), never its training piles.
+
+Every collected sample records how its label came about (``tangle_drake.tangle_data.samples``),
+so the figures are also broken down by cause: two parts in the closing region, a part hanging
+from the target or riding on it, a part that rose and fell back; and, for the picks that lifted
+one part, whether another part was disturbed on the way (rose a centimetre or more, but not
+past the labelling threshold) — the picks a top view confuses most with tangles.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from tangle_drake.bench.stats import wilson
+from tangle_drake.crops import CropSpec
+from tangle_drake.dataset import load_samples, read_manifest, stored_fields
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.tangle_cnn.metrics import balanced_accuracy, binary_metrics
+from tangle_drake.tangle_cnn.model import TangleModel
+from tangle_drake.tangle_cnn.split import split_by_pile, undersample
+from tangle_drake.tangle_cnn.training_data import FIELDS, crop_spec, fingerprint
+
+CAUSE_FIELDS = ("num_in_region", "num_hanging", "num_riding", "max_rise_m")
+"""Fields that say how a label came about (older or synthetic datasets may lack some)."""
+
+DISTURBED_RISE_M = 0.01
+"""A part that rose at least this far during a one-part pick was disturbed by it."""
+
+BATCH = 256
+
+
+@dataclass(frozen=True)
+class Group:
+    """The samples whose label came about one way, and how the model did on them."""
+
+    name: str
+    samples: int
+    correct: int
+    mean_p_tangled: float | None
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """A model's figures on a dataset (``scope`` says which of its samples were scored)."""
+
+    data: str
+    data_part: str | None
+    model_part: str | None
+    scope: str
+    samples: int
+    tangled: int
+    piles: int
+    accuracy: float
+    accuracy_interval: tuple[float, float]
+    """Wilson 95 % interval of the accuracy."""
+    balanced_accuracy: float
+    """Mean of the two classes' recalls: the accuracy a class-balanced set would give."""
+    precision: float | None
+    recall: float | None
+    auc: float | None
+    groups: tuple[Group, ...]
+    """By cause of the label; empty when the dataset does not record the causes."""
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def evaluate_model(model: TangleModel, directory: Path,
+                   progress: Callable[[int], None] | None = None) -> Evaluation:
+    """Score every sample of ``directory`` (or, for the model's own training data, its
+    validation piles) with ``model``; ``progress(n)`` is told of each batch of n samples."""
+    directory = Path(directory)
+    manifest = read_manifest(directory)
+    samples = load_samples(directory, FIELDS)
+    labels = samples["label"].astype(np.int64)
+    if len(labels) == 0:
+        raise TangleDrakeError(f"dataset {directory} has no samples yet; collect some first")
+    crop = crop_spec(manifest, samples["crop"].shape[1], directory)
+    _check_crop(model.crop, crop, directory)
+    rows, scope = _scored_rows(model, samples, labels)
+    p_tangled = np.empty(len(rows), dtype=np.float64)
+    for first in range(0, len(rows), BATCH):
+        batch = rows[first:first + BATCH]
+        p_tangled[first:first + len(batch)] = 1.0 - model.predict(samples["crop"][batch],
+                                                                  samples["depth_m"][batch])
+        if progress is not None:
+            progress(len(batch))
+    truth = labels[rows]
+    metrics = binary_metrics(truth, p_tangled)
+    correct = int(((p_tangled > 0.5) == truth.astype(bool)).sum())
+    return Evaluation(
+        data=str(directory), data_part=manifest.get("part"), model_part=model.info.get("part"),
+        scope=scope, samples=len(rows), tangled=int(truth.sum()),
+        piles=len(np.unique(samples["pile_seed"][rows])),
+        accuracy=float(metrics["accuracy"]), accuracy_interval=wilson(correct, len(rows)),
+        balanced_accuracy=balanced_accuracy(truth, p_tangled), precision=metrics["precision"],
+        recall=metrics["recall"], auc=metrics["auc"],
+        groups=_groups(directory, manifest, rows, truth, p_tangled))
+
+
+def _check_crop(model_crop: CropSpec, data_crop: CropSpec, directory: Path) -> None:
+    if (model_crop.size_px != data_crop.size_px
+            or not np.isclose(model_crop.size_m, data_crop.size_m, rtol=1e-6)):
+        raise TangleDrakeError(
+            f"dataset {directory} holds {data_crop.size_m:g} m crops at {data_crop.size_px} px, "
+            f"the model was trained on {model_crop.size_m:g} m at {model_crop.size_px} px: "
+            "collect the data with the model's crop (tangle-drake collect --crop-size)")
+
+
+def _scored_rows(model: TangleModel, samples: dict[str, np.ndarray],
+                 labels: np.ndarray) -> tuple[np.ndarray, str]:
+    """All rows, or the balanced validation rows when this is the model's training data."""
+    data = model.info.get("data") or {}
+    training = model.info.get("training") or {}
+    if data.get("fingerprint") != fingerprint(samples):
+        return np.arange(len(labels)), "all samples"
+    seed = int(training.get("seed", 0))
+    _, validation = split_by_pile(samples["pile_seed"],
+                                  float(training.get("validation_fraction", 0.1)), seed)
+    return (undersample(validation, labels, seed),
+            "the model's validation piles (this is its training data), classes balanced as in "
+            "training")
+
+
+def _groups(directory: Path, manifest: dict, rows: np.ndarray, truth: np.ndarray,
+            p_tangled: np.ndarray) -> tuple[Group, ...]:
+    """The figures by cause of the label, if the dataset records the causes."""
+    if not set(CAUSE_FIELDS) <= stored_fields(directory):
+        return ()
+    causes = {name: values[rows] for name, values in
+              load_samples(directory, CAUSE_FIELDS).items()}
+    threshold = float((manifest.get("labels") or {}).get("rise_threshold_m", np.nan))
+    region = causes["num_in_region"] >= 2
+    hangs, rides = causes["num_hanging"] > 0, causes["num_riding"] > 0
+    disturbed = causes["max_rise_m"] >= DISTURBED_RISE_M
+    tangled, clean = truth == 1, truth == 0
+    below = f"under {threshold * 100:g} cm" if np.isfinite(threshold) else "under the threshold"
+    selections = {
+        "tangled: two parts in the closing region": tangled & region,
+        "tangled: a part hangs from the target": tangled & ~region & hangs,
+        "tangled: a part rides on the target": tangled & ~region & ~hangs & rides,
+        "tangled: a part rose and fell back": tangled & ~region & ~hangs & ~rides,
+        f"not tangled: no other part rose {DISTURBED_RISE_M * 100:g} cm": clean & ~disturbed,
+        f"not tangled: another part rose {DISTURBED_RISE_M * 100:g} cm or more, {below}":
+            clean & disturbed,
+    }
+    right = (p_tangled > 0.5) == tangled
+    return tuple(Group(name, int(chosen.sum()), int(right[chosen].sum()),
+                       float(p_tangled[chosen].mean()) if chosen.any() else None)
+                 for name, chosen in selections.items())
