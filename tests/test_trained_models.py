@@ -1,5 +1,5 @@
 """The shipped tangle models: one per built-in part, made for the current crop, gripper and
-network, described truthfully by the model card."""
+network, described truthfully by the model card (validation and test figures)."""
 
 import importlib.util
 import json
@@ -48,3 +48,6 @@ def test_the_model_card_says_what_the_shipped_files_hold():
     card = (TRAINED_DIR / "README.md").read_text()
     for part in BUILTIN_PARTS:
         assert tool.card_row(trained_model_path(part)) in card, part
+        tested = tool.test_rows(part)  # raises if the figures belong to another model file
+        assert tested is not None, f"{part}: the shipped model was not tested"
+        assert tested[0] in card, part
