@@ -135,3 +135,11 @@ def test_unusable_inputs_are_named(trained, tmp_path):
         run_evaluate("--data", str(tmp_path / "empty"), "--model", str(model_path))
     with pytest.raises(TangleDrakeError, match="checkpoint not found"):
         run_evaluate("--data", str(tmp_path / "wide"), "--model", str(tmp_path / "nope.pt"))
+    write_synthetic_dataset(tmp_path / "holes", 16, size_px=32, size_m=0.05, seed=4)
+    shard = sorted((tmp_path / "holes").glob("shard_*.npz"))[0]
+    with np.load(shard) as data:
+        arrays = dict(data)
+    arrays["crop"][0, 5, 5] = np.nan
+    write_shard(tmp_path / "holes", int(shard.stem.split("_")[1]), arrays)
+    with pytest.raises(TangleDrakeError, match="holes: crops and depths must be finite"):
+        evaluate_model(load_tangle_model(model_path), tmp_path / "holes")

@@ -22,12 +22,12 @@ import numpy as np
 
 from tangle_drake.bench.stats import wilson
 from tangle_drake.crops import CropSpec
-from tangle_drake.dataset import load_samples, read_manifest, stored_fields
+from tangle_drake.dataset import load_samples, stored_fields
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.metrics import balanced_accuracy, binary_metrics
 from tangle_drake.tangle_cnn.model import TangleModel
 from tangle_drake.tangle_cnn.split import split_by_pile, undersample
-from tangle_drake.tangle_cnn.training_data import FIELDS, crop_spec, fingerprint
+from tangle_drake.tangle_cnn.training_data import fingerprint, load_checked_samples
 
 CAUSE_FIELDS = ("num_in_region", "num_hanging", "num_riding", "max_rise_m")
 """Fields that say how a label came about (older or synthetic datasets may lack some)."""
@@ -79,12 +79,8 @@ def evaluate_model(model: TangleModel, directory: Path,
     """Score every sample of ``directory`` (or, for the model's own training data, its
     validation piles) with ``model``; ``progress(n)`` is told of each batch of n samples."""
     directory = Path(directory)
-    manifest = read_manifest(directory)
-    samples = load_samples(directory, FIELDS)
+    samples, crop, manifest = load_checked_samples(directory)
     labels = samples["label"].astype(np.int64)
-    if len(labels) == 0:
-        raise TangleDrakeError(f"dataset {directory} has no samples yet; collect some first")
-    crop = crop_spec(manifest, samples["crop"].shape[1], directory)
     _check_crop(model.crop, crop, directory)
     rows, scope = _scored_rows(model, samples, labels)
     p_tangled = np.empty(len(rows), dtype=np.float64)

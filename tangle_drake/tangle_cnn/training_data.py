@@ -48,17 +48,15 @@ class TrainingData:
     """Path, content fingerprint, counts and the manifest: stored in the checkpoint."""
 
 
-def load_training_data(directory: Path, normalisation: Normalisation,
-                       validation_fraction: float, seed: int,
-                       target_mask: bool = False) -> TrainingData:
-    """Load ``directory``, split it by pile with ``seed`` and undersample each part's classes;
-    ``target_mask`` alone decides whether the inputs get the target-mask channel (fitted to
-    the data's hand and crop), whatever mask ``normalisation`` held."""
+def load_checked_samples(directory: Path) -> tuple[dict[str, np.ndarray], CropSpec, dict]:
+    """The ``FIELDS`` of every sample as stored (``fingerprint`` hashes them so), the crop
+    spec and the manifest; ``TangleDrakeError`` naming ``directory`` if there are no samples
+    or they are unusable."""
     directory = Path(directory)
     manifest = read_manifest(directory)
     samples = load_samples(directory, FIELDS)
     crops, labels = samples["crop"], samples["label"].astype(np.int64)
-    depths, piles = samples["depth_m"], samples["pile_seed"]
+    depths = samples["depth_m"]
     if len(labels) == 0:
         raise TangleDrakeError(f"dataset {directory} has no samples yet; collect some first")
     if crops.ndim != 3 or crops.shape[1] != crops.shape[2]:
@@ -67,14 +65,27 @@ def load_training_data(directory: Path, normalisation: Normalisation,
     crop = crop_spec(manifest, crops.shape[1], directory)
     if not np.isin(labels, (0, 1)).all():
         raise TangleDrakeError(f"dataset {directory}: labels must be 0 or 1")
+    if not (np.isfinite(crops).all() and np.isfinite(depths).all() and (depths > 0).all()):
+        raise TangleDrakeError(f"dataset {directory}: crops and depths must be finite, "
+                               "depths positive")
+    return samples, crop, manifest
+
+
+def load_training_data(directory: Path, normalisation: Normalisation,
+                       validation_fraction: float, seed: int,
+                       target_mask: bool = False) -> TrainingData:
+    """Load ``directory``, split it by pile with ``seed`` and undersample each part's classes;
+    ``target_mask`` alone decides whether the inputs get the target-mask channel (fitted to
+    the data's hand and crop), whatever mask ``normalisation`` held."""
+    directory = Path(directory)
+    samples, crop, manifest = load_checked_samples(directory)
+    crops, labels = samples["crop"], samples["label"].astype(np.int64)
+    depths, piles = samples["depth_m"], samples["pile_seed"]
     counts = np.bincount(labels, minlength=2)
     if counts.min() == 0:
         only = "tangled" if counts[1] else "not tangled"
         raise TangleDrakeError(f"dataset {directory} holds only {only} samples; the CNN needs "
                                "both classes")
-    if not (np.isfinite(crops).all() and np.isfinite(depths).all() and (depths > 0).all()):
-        raise TangleDrakeError(f"dataset {directory}: crops and depths must be finite, "
-                               "depths positive")
     try:
         train_all, validation_all = split_by_pile(piles, validation_fraction, seed)
     except ValueError:
