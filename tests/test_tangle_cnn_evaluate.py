@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import torch
 
 from tangle_drake.commands import evaluate as evaluate_command
 from tangle_drake.dataset import load_samples, write_shard
@@ -19,26 +18,17 @@ from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.synthetic import write_synthetic_dataset
 from tangle_drake.tangle_cnn.train import TrainSettings, train
 
-
-@pytest.fixture(autouse=True)
-def one_torch_thread():
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(threads)
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
 @pytest.fixture(scope="module")
-def trained(tmp_path_factory) -> tuple[Path, Path]:
+def trained(tmp_path_factory, one_torch_thread) -> tuple[Path, Path]:
     """(training data, checkpoint) of a model of the crossing-bars task."""
     root = tmp_path_factory.mktemp("evaluate")
     write_synthetic_dataset(root / "train", 160, size_px=32, size_m=0.05, seed=1)
     model = root / "bars.pt"
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
     train(root / "train", model, TrainSettings(epochs=3, seed=2), device="cpu",
           log=lambda line: None)
-    torch.set_num_threads(threads)
     return root / "train", model
 
 

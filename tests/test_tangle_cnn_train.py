@@ -29,14 +29,7 @@ from tangle_drake.tangle_cnn.target_mask import TargetMask
 from tangle_drake.tangle_cnn.train import TrainSettings, log_path, state_path, train
 from tangle_drake.tangle_cnn.training_data import load_training_data
 
-
-@pytest.fixture(autouse=True)
-def one_torch_thread():
-    """Two OpenMP threads on two cores shared with other jobs can run ten times slower."""
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(threads)
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 
 @pytest.fixture(scope="module")
