@@ -62,8 +62,9 @@ class Evaluation:
     accuracy: float
     accuracy_interval: tuple[float, float]
     """Wilson 95 % interval of the accuracy."""
-    balanced_accuracy: float
-    """Mean of the two classes' recalls: the accuracy a class-balanced set would give."""
+    balanced_accuracy: float | None
+    """Mean of the two classes' recalls: the accuracy a class-balanced set would give
+    (``None`` when the scored samples hold one class only)."""
     precision: float | None
     recall: float | None
     auc: float | None
