@@ -17,9 +17,9 @@ state) to ``tangle_drake/trained/P.pt``, and tests it on piles of another seed:
     tangle-drake collect --part P --samples T --out DATA/P_test --seed 1 --workers W
     tangle-drake evaluate --data DATA/P_test --model tangle_drake/trained/P.pt --json F
 
-keeping the figures, with the model file's SHA-256, in ``tangle_drake/trained/P.test.json``
-for the card. Every command resumes, so an interrupted run loses little: run the same command
-again. A dataset that already holds ``N`` samples is used as is.
+keeping the figures, with the SHA-256 of the model's weights, in
+``tangle_drake/trained/P.test.json`` for the card. Every command resumes, so an interrupted run
+loses little: run the same command again. A dataset that already holds ``N`` samples is used as is.
 """
 
 from __future__ import annotations
@@ -81,8 +81,14 @@ def test_path(part: str) -> Path:
     return TRAINED_DIR / f"{part}.test.json"
 
 
-def file_sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+def weights_sha256(path: Path) -> str:
+    """SHA-256 of a checkpoint's weights (names, dtypes, shapes, values): the same model
+    saved again gives the same digest, though torch's file bytes differ."""
+    digest = hashlib.sha256()
+    for name, tensor in sorted(read_checkpoint(path, MODEL_KIND)["state_dict"].items()):
+        digest.update(f"{name}{tensor.dtype}{tuple(tensor.shape)}".encode())
+        digest.update(tensor.detach().cpu().contiguous().numpy().tobytes())
+    return digest.hexdigest()
 
 
 def test_model(part: str, samples: int, data: Path, work: Path, workers: int) -> None:
@@ -94,7 +100,7 @@ def test_model(part: str, samples: int, data: Path, work: Path, workers: int) ->
     figures = work / f"{part}.test.json"
     run_command("evaluate", "--data", str(test_data), "--model", str(model), "--json",
                 str(figures), env={"OMP_NUM_THREADS": TRAIN_THREADS})
-    record = {"model_sha256": file_sha256(model), "seed": TEST_SEED,
+    record = {"weights_sha256": weights_sha256(model), "seed": TEST_SEED,
               "evaluation": json.loads(figures.read_text())}
     test_path(part).write_text(json.dumps(record, indent=1) + "\n")
     print(f"wrote {test_path(part)}", flush=True)
@@ -106,7 +112,7 @@ def test_rows(part: str) -> tuple[str, dict[str, str]] | None:
     if not path.is_file():
         return None
     record = json.loads(path.read_text())
-    if record["model_sha256"] != file_sha256(model):
+    if record.get("weights_sha256") != weights_sha256(model):
         raise TangleDrakeError(f"{path} tested another {model}; run --test-only --parts {part}")
     result = record["evaluation"]
     low, high = result["accuracy_interval"]
