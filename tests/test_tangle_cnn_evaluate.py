@@ -104,13 +104,17 @@ def test_balanced_accuracy_weighs_the_classes_equally():
 def test_cli_prints_and_writes_the_figures(trained, tmp_path, capsys):
     _, model_path = trained
     write_synthetic_dataset(tmp_path / "test", 48, size_px=32, size_m=0.05, seed=9)
-    out = tmp_path / "figures.json"
+    out = tmp_path / "new" / "figures.json"  # folders are made
     assert run_evaluate("--data", str(tmp_path / "test"), "--model", str(model_path),
                         "--json", str(out)) == 0
     printed = capsys.readouterr().out
     assert "48 samples, 24 tangled" in printed and "ROC-AUC" in printed
     figures = json.loads(out.read_text())
     assert figures["samples"] == 48 and 0.5 <= figures["accuracy"] <= 1
+    (tmp_path / "file").write_text("")
+    with pytest.raises(TangleDrakeError, match="cannot write"):
+        run_evaluate("--data", str(tmp_path / "test"), "--model", str(model_path),
+                     "--json", str(tmp_path / "file" / "figures.json"))
 
 
 def test_unusable_inputs_are_named(trained, tmp_path):

@@ -52,7 +52,11 @@ def run(args: argparse.Namespace) -> int:
               f"{result.data_part}", file=sys.stderr)
     print(_report(result, model_path))
     if args.json is not None:
-        args.json.write_text(json.dumps(result.to_dict(), indent=1))
+        try:
+            args.json.parent.mkdir(parents=True, exist_ok=True)
+            args.json.write_text(json.dumps(result.to_dict(), indent=1))
+        except OSError as error:
+            raise TangleDrakeError(f"cannot write {args.json}: {error}") from None
         print(f"wrote {args.json}")
     return 0
 
