@@ -62,7 +62,7 @@ def load_checked_samples(directory: Path) -> tuple[dict[str, np.ndarray], CropSp
     if crops.ndim != 3 or crops.shape[1] != crops.shape[2]:
         raise TangleDrakeError(f"dataset {directory}: crops have shape {crops.shape[1:]}, "
                                "not square")
-    crop = crop_spec(manifest, crops.shape[1], directory)
+    crop = _crop_spec(manifest, crops.shape[1], directory)
     if not np.isin(labels, (0, 1)).all():
         raise TangleDrakeError(f"dataset {directory}: labels must be 0 or 1")
     if not (np.isfinite(crops).all() and np.isfinite(depths).all() and (depths > 0).all()):
@@ -129,7 +129,7 @@ def _target_mask(gripper: dict, crop: CropSpec, directory: Path) -> TargetMask:
     return TargetMask.for_hand(crop, hand)
 
 
-def crop_spec(manifest: dict, size_px: int, directory: Path) -> CropSpec:
+def _crop_spec(manifest: dict, size_px: int, directory: Path) -> CropSpec:
     """The manifest's crop spec, checked against the crops' size."""
     info = manifest.get("crop")
     try:
