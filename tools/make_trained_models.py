@@ -181,7 +181,7 @@ TEST_HEADER = (
 TEST_BY_CAUSE = """\
 Right % (samples) by how the label came about, on the same test piles. The last row holds
 lifts of one part during which another rose 1 cm or more, but less than the 3 cm that makes
-a pick tangled: from above they look like tangles, and the models call most of them so.\
+a pick tangled: from above they look like tangles, and the models call many of them so.\
 """
 
 CARD_HEADER = (
