@@ -22,7 +22,7 @@ import numpy as np
 
 from tangle_drake.bench.stats import wilson
 from tangle_drake.crops import CropSpec
-from tangle_drake.dataset import load_samples, stored_fields
+from tangle_drake.dataset import stored_fields
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.metrics import balanced_accuracy, binary_metrics
 from tangle_drake.tangle_cnn.model import TangleModel
@@ -80,7 +80,8 @@ def evaluate_model(model: TangleModel, directory: Path,
     """Score every sample of ``directory`` (or, for the model's own training data, its
     validation piles) with ``model``; ``progress(n)`` is told of each batch of n samples."""
     directory = Path(directory)
-    samples, crop, manifest = load_checked_samples(directory)
+    causes = CAUSE_FIELDS if set(CAUSE_FIELDS) <= stored_fields(directory) else ()
+    samples, crop, manifest = load_checked_samples(directory, causes)
     labels = samples["label"].astype(np.int64)
     _check_crop(model.crop, crop, directory)
     rows, scope = _scored_rows(model, samples, labels)
@@ -101,7 +102,7 @@ def evaluate_model(model: TangleModel, directory: Path,
         accuracy=float(metrics["accuracy"]), accuracy_interval=wilson(correct, len(rows)),
         balanced_accuracy=balanced_accuracy(truth, p_tangled), precision=metrics["precision"],
         recall=metrics["recall"], auc=metrics["auc"],
-        groups=_groups(directory, manifest, rows, truth, p_tangled))
+        groups=_groups(samples, manifest, rows, truth, p_tangled))
 
 
 def _check_crop(model_crop: CropSpec, data_crop: CropSpec, directory: Path) -> None:
@@ -128,13 +129,12 @@ def _scored_rows(model: TangleModel, samples: dict[str, np.ndarray],
             "training")
 
 
-def _groups(directory: Path, manifest: dict, rows: np.ndarray, truth: np.ndarray,
-            p_tangled: np.ndarray) -> tuple[Group, ...]:
+def _groups(samples: dict[str, np.ndarray], manifest: dict, rows: np.ndarray,
+            truth: np.ndarray, p_tangled: np.ndarray) -> tuple[Group, ...]:
     """The figures by cause of the label, if the dataset records the causes."""
-    if not set(CAUSE_FIELDS) <= stored_fields(directory):
+    if not set(CAUSE_FIELDS) <= set(samples):
         return ()
-    causes = {name: values[rows] for name, values in
-              load_samples(directory, CAUSE_FIELDS).items()}
+    causes = {name: samples[name][rows] for name in CAUSE_FIELDS}
     threshold = float((manifest.get("labels") or {}).get("rise_threshold_m", np.nan))
     region = causes["num_in_region"] >= 2
     hangs, rides = causes["num_hanging"] > 0, causes["num_riding"] > 0

@@ -48,13 +48,14 @@ class TrainingData:
     """Path, content fingerprint, counts and the manifest: stored in the checkpoint."""
 
 
-def load_checked_samples(directory: Path) -> tuple[dict[str, np.ndarray], CropSpec, dict]:
-    """The ``FIELDS`` of every sample as stored (``fingerprint`` hashes them so), the crop
-    spec and the manifest; ``TangleDrakeError`` naming ``directory`` if there are no samples
-    or they are unusable."""
+def load_checked_samples(directory: Path, extra_fields: tuple[str, ...] = ()
+                         ) -> tuple[dict[str, np.ndarray], CropSpec, dict]:
+    """The ``FIELDS`` (and ``extra_fields``) of every sample as stored (``fingerprint``
+    hashes them so), the crop spec and the manifest; ``TangleDrakeError`` naming
+    ``directory`` if there are no samples or they are unusable."""
     directory = Path(directory)
     manifest = read_manifest(directory)
-    samples = load_samples(directory, FIELDS)
+    samples = load_samples(directory, (*FIELDS, *extra_fields))
     crops, labels = samples["crop"], samples["label"].astype(np.int64)
     depths = samples["depth_m"]
     if len(labels) == 0:
