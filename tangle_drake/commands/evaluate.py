@@ -31,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
 
     from tangle_drake.dataset import read_manifest
     from tangle_drake.errors import TangleDrakeError
-    from tangle_drake.pick.selection import trained_model_path
+    from tangle_drake.pick.selection import resolve_tangle_choice, trained_model_path
     from tangle_drake.tangle_cnn.evaluate import evaluate_model
     from tangle_drake.tangle_cnn.model import load_tangle_model
 
@@ -40,10 +40,10 @@ def run(args: argparse.Namespace) -> int:
         part = read_manifest(args.data).get("part")
         if not part:
             raise TangleDrakeError(f"dataset {args.data} names no part; pass --model")
-        model_path = trained_model_path(part)
-        if not model_path.is_file():
-            raise TangleDrakeError(f"no shipped model for part {part!r} ({model_path}); "
-                                   "pass --model")
+        model_path = resolve_tangle_choice(part).model
+        if model_path is None:
+            raise TangleDrakeError(f"no shipped model for part {part!r} "
+                                   f"({trained_model_path(part)}); pass --model")
     model = load_tangle_model(model_path)
     with tqdm(desc="scoring", unit="sample", disable=None, leave=False) as bar:
         result = evaluate_model(model, args.data, progress=bar.update)
