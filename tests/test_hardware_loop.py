@@ -3,12 +3,10 @@ move with gripper close/open, and a whole pick by the unchanged pick diagram, co
 outage stops the robot safely and a reset restarts it from where it stands; malformed commands
 are refused by the robot side."""
 
-import argparse
-
 import numpy as np
 import pytest
+from cli_run import run_command
 
-from tangle_drake.commands import hardware_sim as command
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.hardware.limits import robot_limits
 from tangle_drake.hardware.loop import HardwareInTheLoop, run_with_hardware_sim
@@ -194,18 +192,11 @@ def test_the_demo_picks_one_part_through_the_hardware_interface():
     assert "parts left in the bin" in lines[-1]
 
 
-def _run_command(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser()
-    command.register(parser.add_subparsers())
-    args = parser.parse_args(argv)
-    return args.func(args)
-
-
 def test_hardware_sim_command_checks_in_process_and_refuses_an_unreachable_bus(tmp_path, capsys):
     scenario = tmp_path / "small.yaml"
     scenario.write_text(SMALL)
-    assert _run_command(["hardware-sim", "--scenario", str(scenario), "--check"]) == 0
+    assert run_command("hardware-sim", "--scenario", str(scenario), "--check") == 0
     out = capsys.readouterr().out
     assert "scripted motion finished" in out and "safety running" in out
     with pytest.raises(TangleDrakeError, match="which no other process can reach"):
-        _run_command(["hardware-sim", "--scenario", str(scenario)])
+        run_command("hardware-sim", "--scenario", str(scenario))

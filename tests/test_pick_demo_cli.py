@@ -1,20 +1,15 @@
 """``tangle-drake demo``'s refusals, and which model and rule a part gets."""
 
-import argparse
+from functools import partial
 
 import pytest
+from cli_run import run_command
 
-from tangle_drake.commands import demo
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.pick import selection
 from tangle_drake.pick.selection import resolve_tangle_choice
 
-
-def run_demo_command(*argv: str) -> None:
-    parser = argparse.ArgumentParser()
-    demo.register(parser.add_subparsers())
-    args = parser.parse_args(["demo", *argv])
-    args.func(args)
+run_demo_command = partial(run_command, "demo")
 
 
 @pytest.mark.parametrize(("argv", "message"), [

@@ -2,14 +2,14 @@
 training data only on its validation piles (reproducing the checkpoint's figure), the figures
 by cause of the label add up, and mismatched or unusable inputs are named clearly."""
 
-import argparse
 import json
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_run import run_command
 
-from tangle_drake.commands import evaluate as evaluate_command
 from tangle_drake.dataset import load_samples, write_shard
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.evaluate import evaluate_model
@@ -48,11 +48,7 @@ def with_causes(directory: Path, rng: np.random.Generator) -> dict[str, np.ndarr
                                     "max_rise_m"))
 
 
-def run_evaluate(*argv: str) -> int:
-    parser = argparse.ArgumentParser()
-    evaluate_command.register(parser.add_subparsers())
-    args = parser.parse_args(["evaluate", *argv])
-    return args.func(args)
+run_evaluate = partial(run_command, "evaluate")
 
 
 def test_fresh_piles_are_all_scored(trained, tmp_path):

@@ -1,13 +1,13 @@
 """ONNX export: ONNX Runtime and torch agree on random crops (needs the onnx extra)."""
 
-import argparse
 import json
+from functools import partial
 
 import numpy as np
 import pytest
 import torch
+from cli_run import run_command
 
-from tangle_drake.commands import export_onnx as export_command
 from tangle_drake.crops import CropSpec
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, save_atomic
@@ -21,11 +21,7 @@ onnxruntime = pytest.importorskip("onnxruntime")
 pytest.importorskip("onnxscript")
 
 
-def run_export(*argv: str) -> int:
-    parser = argparse.ArgumentParser()
-    export_command.register(parser.add_subparsers())
-    args = parser.parse_args(["export-onnx", *argv])
-    return args.func(args)
+run_export = partial(run_command, "export-onnx")
 
 
 def wire_crops(depths: np.ndarray, rng: np.random.Generator) -> np.ndarray:

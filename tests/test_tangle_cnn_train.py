@@ -1,16 +1,16 @@
 """Training the tangle CNN: it learns a separable task, the CLI writes what it promises, an
 interrupted run resumes to the same weights, and bad datasets are named clearly."""
 
-import argparse
 import json
 from dataclasses import asdict
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
+from cli_run import run_command
 
-from tangle_drake.commands import train as train_command
 from tangle_drake.crops import CropSpec
 from tangle_drake.dataset import write_manifest, write_shard
 from tangle_drake.errors import TangleDrakeError
@@ -39,11 +39,7 @@ def dataset(tmp_path_factory) -> Path:
     return directory
 
 
-def run_train(*argv: str) -> int:
-    parser = argparse.ArgumentParser()
-    train_command.register(parser.add_subparsers())
-    args = parser.parse_args(["train", *argv])
-    return args.func(args)
+run_train = partial(run_command, "train")
 
 
 def test_the_network_learns_crossing_bars(dataset, tmp_path):

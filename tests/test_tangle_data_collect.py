@@ -1,7 +1,6 @@
 """Collections: a killed run resumes to exactly the uninterrupted dataset, a seed always makes
 the same samples, the command line works end to end, and bad input is a clear error."""
 
-import argparse
 import json
 import os
 import signal
@@ -9,12 +8,13 @@ import subprocess
 import sys
 import time
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_run import run_command
 
-from tangle_drake.commands import collect as collect_command
 from tangle_drake.dataset import SAMPLE_FIELDS, finished_tasks, load_samples, read_manifest
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_data.collect import collect, default_scenario_text
@@ -35,11 +35,7 @@ RUN_CLI = ("import sys, argparse\n"
            "    sys.exit(args.func(args))\n")
 
 
-def run_cli(*argv: str) -> int:
-    parser = argparse.ArgumentParser()
-    collect_command.register(parser.add_subparsers())
-    args = parser.parse_args(["collect", *argv])
-    return args.func(args)
+run_cli = partial(run_command, "collect")
 
 
 def shards(directory: Path) -> dict[int, dict[str, bytes]]:
