@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
+import select
 import sys
 from collections.abc import Sequence
 
@@ -27,13 +29,42 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        code = int(args.func(args) or 0)
+        sys.stdout.flush()  # a reader that has gone shows up here, not at interpreter exit
+        return code
     except TangleDrakeError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        if not _stdout_gone():
+            raise  # some other pipe broke: that is a real error
+        return SIGPIPE_EXIT
+
+
+SIGPIPE_EXIT = 141
+"""The shell's status for a tool stopped by SIGPIPE (128 + 13), e.g. under ``| head``."""
+
+
+def _stdout_gone() -> bool:
+    """Whether standard output's reader has gone (a pipe's write end reports POLLERR then);
+    if so, point it at /dev/null so the flush at interpreter exit stays quiet too."""
+    try:
+        sys.stdout.flush()
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+        gone = any(event & select.POLLERR for _, event in poller.poll(0))
+    except BrokenPipeError:
+        gone = True
+    except (AttributeError, OSError, ValueError):  # no poll() here, or stdout is no file
+        return False
+    if gone:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    return gone
 
 
 if __name__ == "__main__":
