@@ -282,7 +282,8 @@ seed's sequence) and, on the CPU with the same number of torch threads, the same
   [79, 90] (0.897); the shipped 2-D models 70.1 % (0.751) and 76.8 % (0.852). So most of
   what the shipped models miss against the true geometry (6-8 points) lies in telling the
   target part apart in the top view, not in what the view hides; and given the full
-  geometry, this network still fell 6-11 points short of 90 %.
+  geometry, this network still fell 6 (C-ring) to 14 (U-hook; 11 with twice the data)
+  points short of 90 %.
 - The data's candidates come from the plain graspability index, as in the paper; the pick
   diagram adds the grip test, which drops some of them before the CNN scores the rest.
 - The shipped files were trained with one torch thread (`OMP_NUM_THREADS=1`, as above: the
