@@ -284,14 +284,14 @@ seed's sequence) and, on the CPU with the same number of torch threads, the same
   Telling the target apart is not what the 2-D network lacks either: given the true target
   mask (and a mask of the other parts) instead of the flood fill, the shipped recipe scored
   within 1.2 points of it, averaged over three splits by pile (C-ring 79.5 % and 78.2 %
-  against 78.3 %; U-hook 68.2 % and 68.0 % against 67.9 %). Nor is the 2-D network itself:
-  the 3-D network on the shipped models' own input (the crop's heights as a top-view
-  occupancy grid at 4 mm, with the flood-fill mask) scored C-ring 79.0, 78.3 and 85.2 % on
-  the three splits against 76.8, 77.0 and 81.0 % (ROC-AUC 0.877 against 0.855 on average),
-  but U-hook 70.1 and 68.8 % on two splits, the shipped recipe's very figures. (An earlier
-  version of this probe left the target channel empty when two parts lay in the closing
-  region, which gave those samples' label away; the figures here are without that leak,
-  2-5 points lower.)
+  against 78.3 %; U-hook 68.2 % and 68.0 % against 67.9 %). Swapping the 2-D network for
+  the 3-D one on the shipped models' own input (the crop's heights as a top-view occupancy
+  grid at 4 mm, with the flood-fill mask) helped on the C-ring only: 79.0, 78.3 and 85.2 %
+  on the three splits against 76.8, 77.0 and 81.0 % (ROC-AUC 0.877 against 0.855 on
+  average), but U-hook 70.1 and 68.8 % on two splits, the shipped recipe's very figures.
+  (An earlier version of this probe left the target channel empty when two parts lay in
+  the closing region, which gave those samples' label away; the figures here are without
+  that leak, 2-5 points lower.)
 - The data's candidates come from the plain graspability index, as in the paper; the pick
   diagram adds the grip test, which drops some of them before the CNN scores the rest.
 - The shipped files were trained with one torch thread (`OMP_NUM_THREADS=1`, as above: the
