@@ -39,10 +39,16 @@ def diagrams_dir() -> Path:
     return _shipped_dir("diagrams", "pick_demo.yaml")
 
 
+SHIPPED_PACKAGES = ("nextage", "gantry")
+"""The model packages under ``models/``: the Nextage with its gripper, and the gantry."""
+
+
 def register_packages(package_map: PackageMap) -> None:
-    """Make ``package://nextage/...`` resolvable in ``package_map``."""
-    if not package_map.Contains("nextage"):
-        package_map.AddPackageXml(str(models_dir() / "nextage" / "package.xml"))
+    """Make ``package://nextage/...`` and ``package://gantry/...`` resolvable in
+    ``package_map``."""
+    for name in SHIPPED_PACKAGES:
+        if not package_map.Contains(name):
+            package_map.AddPackageXml(str(models_dir() / name / "package.xml"))
 
 
 def make_parser(plant, scope_name: str | None = None) -> Parser:

@@ -21,11 +21,11 @@ from pydrake.multibody.math import SpatialVelocity
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import Body
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import Context, Diagram
+from pydrake.systems.framework import Context
 
 from tangle_drake.bin_model import inside_bin
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
-from tangle_drake.station import PLANT_NAME, hold_robot_still, pile_instances
+from tangle_drake.station import SimulatedStation
 
 _CHECK_PERIOD = 0.05  # s of simulated time between rest checks
 _REST_CHECKS = 2  # consecutive checks at rest before the pile counts as settled
@@ -55,11 +55,6 @@ class PileReport:
         return self.num_parts - len(self.parked)
 
 
-def part_bodies(plant: MultibodyPlant) -> list[Body]:
-    """The single body of each pile part, in pile order."""
-    return [plant.get_body(plant.GetBodyIndices(i)[0]) for i in pile_instances(plant)]
-
-
 def drop_pile(simulator: Simulator, bin_config: BinConfig, pile_config: PileConfig,
               seed: int | None = None,
               progress: Callable[[str], None] | None = None) -> PileReport:
@@ -69,15 +64,15 @@ def drop_pile(simulator: Simulator, bin_config: BinConfig, pile_config: PileConf
     seed on the same station gives the same pile.
     """
     seed = pile_config.seed if seed is None else seed
-    diagram: Diagram = simulator.get_system()
-    plant: MultibodyPlant = diagram.GetSubsystemByName(PLANT_NAME)
+    station: SimulatedStation = simulator.get_system()
+    plant = station.plant
     root = simulator.get_mutable_context()
-    bodies = part_bodies(plant)
+    bodies = station.pile_bodies
     report = PileReport(seed=seed, num_parts=len(bodies))
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
 
-    placer = _Placer(diagram, plant, root, bin_config, bodies)
+    placer = _Placer(plant, root, bin_config, bodies)
     placer.stage(bodies)
     to_drop = list(bodies)
     for round_index in range(pile_config.max_redraws + 1):
@@ -108,14 +103,14 @@ class PileDropper:
     """Drops pile after pile into a station with its robot held still, each from the station's
     initial state, so a pile depends on its seed alone and not on the piles before it."""
 
-    def __init__(self, station: Diagram, scenario: Scenario) -> None:
+    def __init__(self, station: SimulatedStation, scenario: Scenario) -> None:
         self.scenario = scenario
+        self.station = station
         self.simulator = Simulator(station)
         context = self.simulator.get_mutable_context()
-        hold_robot_still(station, context)
+        station.hold_still(context)
         self.simulator.Initialize()
         self.initial = context.Clone()
-        self.plant: MultibodyPlant = station.GetSubsystemByName(PLANT_NAME)
 
     def drop(self, seed: int | None = None) -> tuple[np.ndarray, PileReport]:
         """A settled pile (``seed`` or the scenario's): the plant's positions and velocities,
@@ -123,14 +118,13 @@ class PileDropper:
         self.simulator.get_mutable_context().SetTimeStateAndParametersFrom(self.initial)
         self.simulator.Initialize()
         report = drop_pile(self.simulator, self.scenario.bin, self.scenario.pile, seed)
-        context = self.plant.GetMyContextFromRoot(self.simulator.get_context())
-        return self.plant.GetPositionsAndVelocities(context), report
+        return self.station.plant_state(self.simulator.get_context()), report
 
 
 class _Placer:
     """Places parts at collision-free random poses above the bin (or out of the way)."""
 
-    def __init__(self, diagram: Diagram, plant: MultibodyPlant, root: Context,
+    def __init__(self, plant: MultibodyPlant, root: Context,
                  bin_config: BinConfig, bodies: list[Body]) -> None:
         self.plant = plant
         self.root = root

@@ -15,7 +15,6 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
 
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.paths import make_parser
 from tangle_drake.robot_model import JOINTS, init_rtm
 
@@ -65,16 +64,3 @@ def add_nextage_with_gripper(
     """
     make_parser(plant).AddModelsFromUrl(DIRECTIVES_URL)
     return plant.GetModelInstanceByName("nextage"), plant.GetModelInstanceByName("gripper")
-
-
-def gripper_width_to_positions(width: float,
-                               spec: GripperSpec = DEFAULT_GRIPPER) -> tuple[float, float]:
-    """Finger joint positions ``(q_left, q_right)`` that open the fingers ``width`` apart.
-
-    The gripper model's opening is ``q_right - q_left`` with the fingers moving symmetrically.
-    Widths outside ``[0, spec.max_opening]`` are refused rather than clipped: asking for them
-    is a bug in the caller.
-    """
-    if not 0.0 <= width <= spec.max_opening:
-        raise ValueError(f"gripper width {width!r} m outside [0, {spec.max_opening}]")
-    return -width / 2, width / 2

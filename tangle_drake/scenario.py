@@ -20,6 +20,7 @@ from pydrake.multibody.parsing import ModelDirective
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.sensors import CameraConfig
 
+from tangle_drake.drivers.config import DriverConfig, ParallelJawDriver, camera_channel
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.hardware.config import HardwareConfig, default_lcm_buses
 
@@ -102,12 +103,18 @@ class PileConfig:
 
 @dataclass
 class Scenario:
-    """One station: plant settings, robot directives, bin, pile, top camera, view cameras."""
+    """One station: plant settings, models and their drivers, bin, pile, top camera, view
+    cameras, LCM buses."""
 
     plant_config: MultibodyPlantConfig = field(default_factory=_default_plant_config)
     directives: list[ModelDirective] = field(default_factory=list)
-    """Robot and gripper (e.g. ``package://nextage/nextage_with_gripper.dmd.yaml``); empty
-    for a robot-less station such as the tangle-data simulator's."""
+    """The gripper and what carries it (e.g. ``package://nextage/nextage_with_gripper.dmd.yaml``
+    or ``package://gantry/floating_gripper.dmd.yaml``); empty for a robot-less station such
+    as the tangle-data simulator's."""
+    model_drivers: dict[str, DriverConfig] = field(default_factory=dict)
+    """Model instance name -> its driver (``!NextageDriver``, ``!GantryDriver``,
+    ``!ParallelJawDriver``; :mod:`tangle_drake.drivers.config`). Every model with actuators
+    needs one; a picking station has one carrier and the gripper ``gripper``."""
     initial_positions: dict[str, float] = field(default_factory=dict)
     """Joint name -> initial position (rad or m); the robot's other joints start at
     ``robot.HOME``."""
@@ -124,7 +131,8 @@ class Scenario:
     """LCM buses by name, as in Drake's ``hardware_sim``; the default bus is in-process only
     (``memq://``). A real robot's network URL goes here (``docs/hardware.md``)."""
     hardware: HardwareConfig = field(default_factory=HardwareConfig)
-    """Channels, rates and timeouts of the robot's drivers (``build_station(hardware=True)``)."""
+    """Rates and timeouts of the LCM link to the robot's drivers
+    (``build_station(hardware=True)``)."""
 
     def validate(self) -> None:
         time_step = self.plant_config.time_step
@@ -147,7 +155,28 @@ class Scenario:
         names = [c.name for c in self.view_cameras]
         _require(len(set(names)) == len(names) and self.camera.name not in names,
                  "view_cameras", "need names unique among all cameras")
-        self.hardware.validate("hardware", list(self.lcm_buses))
+        self.hardware.validate("hardware")
+        self._validate_links()
+
+    def _validate_links(self) -> None:
+        """Every driver's and the camera's bus exists; every channel is named, and only once."""
+        links = [(f"model_drivers.{name}", config.lcm_bus,
+                  [config.command_channel, config.status_channel])
+                 for name, config in self.model_drivers.items()]
+        links.append(("camera", self.camera.lcm_bus, [camera_channel(self.camera)]))
+        channels: list[str] = []
+        for where, bus, names in links:
+            buses = ", ".join(sorted(self.lcm_buses)) or "none"
+            _require(bus in self.lcm_buses, f"{where}.lcm_bus",
+                     f"names no bus in 'lcm_buses' ({buses})")
+            _require(all(names), where, "needs non-empty channel names")
+            channels += names
+        repeated = sorted({c for c in channels if channels.count(c) > 1})
+        _require(not repeated, "model_drivers", f"use channel {', '.join(repeated)} twice")
+        for name, config in self.model_drivers.items():
+            if isinstance(config, ParallelJawDriver):
+                _require(config.force_limit > 0, f"model_drivers.{name}.force_limit",
+                         "must be positive")
 
 
 class _Tagged(typing.NamedTuple):
@@ -212,6 +241,7 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
         raw = {}
     if not isinstance(raw, dict):
         raise TangleDrakeError(f"{source}: a scenario must be a mapping of fields")
+    _check_driver_tags(raw.get("model_drivers"), source)
     try:
         scenario = yaml_load_typed(schema=Scenario, data=text, defaults=Scenario())
     except (RuntimeError, ValueError, TypeError) as error:
@@ -222,6 +252,17 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
     except TangleDrakeError as error:
         raise TangleDrakeError(f"{source}: {error}") from error
     return scenario
+
+
+def _check_driver_tags(drivers: object, source: str) -> None:
+    """Drake's loader takes an untagged driver as the first kind; make the user say which."""
+    if not isinstance(drivers, dict):
+        return
+    for name, value in drivers.items():
+        if not isinstance(value, _Tagged):
+            kinds = ", ".join(f"!{kind.__name__}" for kind in typing.get_args(DriverConfig))
+            raise TangleDrakeError(f"{source}: scenario field 'model_drivers.{name}' needs a "
+                                   f"driver tag: one of {kinds}")
 
 
 def _find_bad_field(schema: type, raw: object, prefix: str) -> str:

@@ -14,16 +14,16 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context, Diagram
 
 from tangle_drake.camera import CameraModel, save_camera_json
-from tangle_drake.pile import PileReport, drop_pile, part_bodies
+from tangle_drake.pile import PileReport, drop_pile
 from tangle_drake.scenario import Scenario
-from tangle_drake.station import PLANT_NAME, build_station, camera_model, hold_robot_still
+from tangle_drake.station import SimulatedStation, build_station, camera_model
 
 
 @dataclass
 class Scene:
     """The station after a pile was dropped, with the camera's images of it."""
 
-    station: Diagram
+    station: SimulatedStation
     simulator: Simulator
     report: PileReport
     camera: CameraModel
@@ -60,11 +60,10 @@ class Scene:
 
     def part_poses(self) -> dict[str, list[list[float]]]:
         """Model instance name -> 4x4 world pose of each part, from the simulator's state."""
-        plant = self.station.GetSubsystemByName(PLANT_NAME)
-        plant_context = plant.GetMyContextFromRoot(self.context)
-        return {plant.GetModelInstanceName(body.model_instance()):
-                body.EvalPoseInWorld(plant_context).GetAsMatrix4().tolist()
-                for body in part_bodies(plant)}
+        plant = self.station.plant
+        poses = self.station.part_poses(self.context)
+        return {plant.GetModelInstanceName(body.model_instance()): pose.tolist()
+                for body, pose in zip(self.station.pile_bodies, poses, strict=True)}
 
 
 def render_depth(station: Diagram, context: Context) -> np.ndarray:
@@ -89,7 +88,7 @@ def make_scene(scenario: Scenario, seed: int | None = None,
     start = time.perf_counter()
     station = build_station(scenario)
     simulator = Simulator(station)
-    hold_robot_still(station, simulator.get_mutable_context())
+    station.hold_still(simulator.get_mutable_context())
     simulator.Initialize()
     timings["build_station"] = time.perf_counter() - start
 

@@ -18,12 +18,11 @@ from tangle_drake.bench.trials import classify, method_seed, pile_seed
 from tangle_drake.cli import main
 from tangle_drake.crops import CropSpec
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.floating_gripper import build_floating_station
 from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, classify_lift
-from tangle_drake.pile import PileDropper, part_bodies
+from tangle_drake.pile import PileDropper
 from tangle_drake.scenario import PartCount
 from tangle_drake.scenario_files import resolve_scenario
-from tangle_drake.station import PLANT_NAME
+from tangle_drake.station import build_station, part_bodies
 from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, save_atomic
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
@@ -83,10 +82,10 @@ def test_pick_results_and_failure_causes(record, expected):
 
 
 def test_hand_made_end_states_count_the_parts_hanging_from_the_gripper():
-    scenario = resolve_scenario(None)
+    scenario = resolve_scenario("floating_gripper.yaml")
     scenario = replace(scenario, pile=replace(scenario.pile, parts=[PartCount("u_hook", 3)]))
-    station = build_floating_station(scenario)
-    plant = station.GetSubsystemByName(PLANT_NAME)
+    station = build_station(scenario)
+    plant = station.plant
     monitor = LiftMonitor(plant, scenario.bin)
     context = station.CreateDefaultContext()
     plant_context = plant.GetMyMutableContextFromRoot(context)
@@ -127,9 +126,9 @@ def test_a_trial_seed_depends_on_the_run_seed_part_and_index_only():
 
 
 def test_a_pile_depends_on_its_seed_alone():
-    scenario = resolve_scenario(None)
+    scenario = resolve_scenario("floating_gripper.yaml")
     scenario = replace(scenario, pile=replace(scenario.pile, parts=[PartCount("u_hook", 4)]))
-    dropper = PileDropper(build_floating_station(scenario), scenario)
+    dropper = PileDropper(build_station(scenario), scenario)
     first, _ = dropper.drop(7)
     other, _ = dropper.drop(8)
     again, _ = dropper.drop(7)

@@ -8,10 +8,9 @@ from tangle_drake.graspability import bin_roi, compute_candidates
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.parts import BUILTIN_PARTS
 from tangle_drake.paths import diagrams_dir
-from tangle_drake.pile import part_bodies
 from tangle_drake.scenario import PartCount, load_scenario
 from tangle_drake.scene import make_scene
-from tangle_drake.station import PLANT_NAME
+from tangle_drake.station import part_bodies
 
 
 @pytest.mark.parametrize("part", BUILTIN_PARTS)
@@ -23,7 +22,7 @@ def test_candidates_map_to_world_poses_on_real_parts(part):
                                     roi=bin_roi(scene.camera, inner_corners(scenario.bin)))
     assert len(candidates) >= 3
 
-    plant = scene.station.GetSubsystemByName(PLANT_NAME)
+    plant = scene.station.plant
     query = scene.station.GetOutputPort("sim.query_object").Eval(scene.context)
     part_geometries = {g for body in part_bodies(plant)
                        for g in plant.GetCollisionGeometriesForBody(body)}

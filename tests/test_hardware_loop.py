@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from cli_run import run_command
 
+from tangle_drake.drivers.limits import station_limits
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.hardware.limits import robot_limits
 from tangle_drake.hardware.loop import HardwareInTheLoop, run_with_hardware_sim
 from tangle_drake.hardware.safety import Mode
 from tangle_drake.hardware.scripted import default_target, scripted_controller
@@ -19,6 +19,7 @@ SMALL = """
 directives:
 - add_directives:
     file: package://nextage/nextage_with_gripper.dmd.yaml
+model_drivers: {nextage: !NextageDriver {}, gripper: !ParallelJawDriver {}}
 pile: {parts: [{part: u_hook, count: 3}]}
 camera:
   name: camera
@@ -68,7 +69,7 @@ class Probe:
 def _within_speed_limits(told: np.ndarray, period: float) -> bool:
     """Whether the robot was never told to move a joint faster than its limit."""
     speed = np.abs(np.diff(told, axis=0)) / period
-    return bool(np.all(speed <= robot_limits(_scenario()).velocity))
+    return bool(np.all(speed <= station_limits(_scenario()).velocity))
 
 
 def test_scripted_move_and_gripper_close_open_complete_with_the_state_following():
@@ -173,7 +174,8 @@ def test_the_demo_picks_one_part_through_the_hardware_interface():
     """``tangle-drake demo --hardware --with-hardware-sim``: the unchanged pick diagram, its
     station built with hardware=True, against the hardware simulator: one whole pick (look,
     plan, approach, grasp, lift, check, place)."""
-    from tangle_drake.pick.demo import DemoOptions, empty_width, run_demo
+    from tangle_drake.pick.demo import DemoOptions, run_demo
+    from tangle_drake.pick.diagram import pick_settings
     from tangle_drake.pick.outcome import Outcome
 
     scenario = load_scenario(diagrams_dir() / "pick_demo.yaml")
@@ -187,7 +189,7 @@ def test_the_demo_picks_one_part_through_the_hardware_interface():
     # width alone (the hardware station has no simulation-only ports).
     assert record.outcome is not Outcome.FAILED, record.describe()
     assert record.lifted is None
-    assert (record.outcome is Outcome.NONE) == (record.width < empty_width(scenario.pile))
+    assert (record.outcome is Outcome.NONE) == (record.width < pick_settings(scenario).empty_width)
     assert any("over memq://" in line for line in lines), lines
     assert "parts left in the bin" in lines[-1]
 

@@ -7,13 +7,14 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
+from tangle_drake.drivers.limits import RobotLimits
 from tangle_drake.hardware.config import HardwareConfig
-from tangle_drake.hardware.limits import RobotLimits
 from tangle_drake.hardware.messages import Received
 from tangle_drake.hardware.safety import Mode, SafetySupervisor
 from tangle_drake.robot import NEXTAGE_JOINTS
 
-LIMITS = RobotLimits(position_lower=np.full(15, -2.0), position_upper=np.full(15, 2.0),
+LIMITS = RobotLimits(joint_names=NEXTAGE_JOINTS, units=("rad",) * 15,
+                     position_lower=np.full(15, -2.0), position_upper=np.full(15, 2.0),
                      velocity=np.full(15, 1.0), gripper_max_width=0.045)
 CONFIG = HardwareConfig()
 PERIOD = CONFIG.command_period
@@ -24,7 +25,7 @@ class Harness:
     """The supervisor with its inputs set by hand, advanced one command period per tick."""
 
     def __init__(self) -> None:
-        self.system = SafetySupervisor(LIMITS, CONFIG)
+        self.system = SafetySupervisor(LIMITS, CONFIG, ("NEXTAGE_STATUS", "WSG_STATUS"))
         self.simulator = Simulator(self.system)
         self.measured = np.full(15, 0.3)
         self.width = 0.02

@@ -124,7 +124,7 @@ def test_no_command_goes_out_before_fresh_status_and_the_first_holds_the_measure
     np.testing.assert_allclose(first.joint_position, HOME)
     gripper = lcmt_schunk_wsg_command.decode(bus.commands["WSG_COMMAND"][0])
     assert gripper.target_position_mm == pytest.approx(30.0)
-    assert gripper.force == bus.scenario.hardware.gripper_force_limit
+    assert gripper.force == bus.scenario.model_drivers["gripper"].force_limit
 
 
 def test_malformed_status_is_refused_and_reported_while_the_station_runs_on(caplog):
@@ -147,7 +147,7 @@ def test_malformed_status_is_refused_and_reported_while_the_station_runs_on(capl
     for data in bad_status:
         bus.lcm.Publish("NEXTAGE_STATUS", data)
         bus.simulator.AdvanceTo(bus.time + 0.005)
-    bus.lcm.Publish("DRAKE_RGBD_CAMERA_IMAGES", b"not an image array")
+    bus.lcm.Publish("DRAKE_RGBD_CAMERA_IMAGES_camera", b"not an image array")
     bus.lcm.Publish("WSG_STATUS", b"\xff" * 40)
     bus.simulator.AdvanceTo(bus.time + 0.010)  # the report counts at the next command tick
 
@@ -155,7 +155,7 @@ def test_malformed_status_is_refused_and_reported_while_the_station_runs_on(capl
     assert bus.out("safety.report").rejected == (4, 1)
     for reason in ("does not decode as lcmt_iiwa_status", "num_joints is 7, expected 15",
                    "joint_position_measured has non-finite values",
-                   "rejected message 1 on DRAKE_RGBD_CAMERA_IMAGES",
+                   "rejected message 1 on DRAKE_RGBD_CAMERA_IMAGES_camera",
                    "rejected message 1 on WSG_STATUS"):
         assert reason in caplog.text
     assert bus.out("camera.depth_image").width() == 0  # nothing valid arrived
@@ -190,7 +190,7 @@ def test_depth_arrives_in_metres_from_32f_and_16u(depth, channel_type, metres):
     array.images = [_image(rgba, lcmt_image.PIXEL_FORMAT_RGBA, lcmt_image.CHANNEL_TYPE_UINT8),
                     _image(pixels, lcmt_image.PIXEL_FORMAT_DEPTH, channel_type)]
     array.num_images = 2
-    bus.lcm.Publish("DRAKE_RGBD_CAMERA_IMAGES", array.encode())
+    bus.lcm.Publish("DRAKE_RGBD_CAMERA_IMAGES_camera", array.encode())
     bus.advance(0.01)
     image = np.array(bus.out("camera.depth_image").data)[:, :, 0]
     np.testing.assert_allclose(image, np.resize(np.array(metres, np.float32), (HEIGHT, WIDTH)))
@@ -200,13 +200,22 @@ def test_depth_arrives_in_metres_from_32f_and_16u(depth, channel_type, metres):
 def test_scenario_defaults_keep_lcm_in_process_and_bad_hardware_fields_are_named():
     scenario = parse_scenario("{}")
     assert scenario.lcm_buses["default"].lcm_url == "memq://"
-    assert scenario.hardware.nextage_status_channel == "NEXTAGE_STATUS"
     robot = parse_scenario("""
 lcm_buses: {robot: {lcm_url: "udpm://239.255.76.67:7667?ttl=0"}}
-hardware: {lcm_bus: robot, depth_format: 16U, status_timeout: 0.05}
+model_drivers: {nextage: !NextageDriver {lcm_bus: robot}}
+hardware: {depth_format: 16U, status_timeout: 0.05}
 """)
-    assert robot.hardware.lcm_bus == "robot" and robot.hardware.depth_format == "16U"
-    for text, field in [("hardware: {lcm_bus: robot}", "hardware.lcm_bus"),
+    assert robot.model_drivers["nextage"].lcm_bus == "robot"
+    assert robot.model_drivers["nextage"].status_channel == "NEXTAGE_STATUS"
+    assert robot.hardware.depth_format == "16U"
+    for text, field in [("model_drivers: {nextage: !NextageDriver {lcm_bus: robot}}",
+                         "model_drivers.nextage.lcm_bus"),
+                        ("model_drivers: {nextage: {lcm_bus: default}}", "model_drivers.nextage"),
+                        ("model_drivers: {nextage: !NextageDriver {}, gantry: !GantryDriver "
+                         "{status_channel: NEXTAGE_STATUS}}", "model_drivers"),
+                        ("model_drivers: {gripper: !ParallelJawDriver {force_limit: 0}}",
+                         "model_drivers.gripper.force_limit"),
+                        ("camera: {name: camera, lcm_bus: elsewhere}", "camera.lcm_bus"),
                         ("hardware: {depth_format: 8U}", "hardware.depth_format"),
                         ("hardware: {status_timeout: 0.001}", "hardware.status_timeout"),
                         ("hardware: {status_timeot: 0.2}", "hardware.status_timeot")]:

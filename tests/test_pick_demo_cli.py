@@ -19,7 +19,7 @@ run_demo_command = partial(run_command, "demo")
     (["--picks", "0"], "--picks must be at least 1"),
     (["--record", "demo.txt"], "--record must name an .html file"),
     (["--scenario", "no/such.yaml"], "cannot read scenario file"),
-    (["--scenario", "pile_only.yaml"], "the station has no 'nextage.state_measured' port"),
+    (["--scenario", "pile_only.yaml"], "picking needs a robot: .* exactly one !NextageDriver"),
     (["--with-hardware-sim"], "--with-hardware-sim goes with --hardware"),
     (["--hardware", "--meshcat"], "with --hardware there is none in the controller"),
     (["--hardware"], "'memq://', which no other process can reach"),

@@ -9,9 +9,9 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 
-from tangle_drake.pick.motion import PickMotion, PlanningError
 from tangle_drake.pick.outcome import Outcome, summarize
 from tangle_drake.pick.planner import Mode, PickPlanner, PickSettings, rank_scored
+from tangle_drake.planning.motion import PickMotion, PlanningError
 from tangle_drake.planning.trajectory import rest_to_rest
 from tangle_drake.tangle_cnn.system import ScoredCandidate
 

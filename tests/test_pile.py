@@ -6,10 +6,9 @@ import pytest
 from tangle_drake.bin_model import inside_bin
 from tangle_drake.parts import BUILTIN_PARTS
 from tangle_drake.paths import diagrams_dir
-from tangle_drake.pile import part_bodies
 from tangle_drake.scenario import PartCount, load_scenario
 from tangle_drake.scene import make_scene
-from tangle_drake.station import PLANT_NAME
+from tangle_drake.station import part_bodies
 
 
 def _scenario(part: str, count: int = 15, seed: int = 0):
@@ -43,7 +42,7 @@ def test_pile_of_15_settles_inside_the_bin_and_shows_in_depth(part):
     assert np.isfinite(centre).all()
     # The renderer labels each pixel with its body's index: the parts are what is above the floor.
     labels = scene.label_image()
-    plant = scene.station.GetSubsystemByName(PLANT_NAME)
+    plant = scene.station.plant
     visible = [b for b in part_bodies(plant) if (labels == int(b.index())).sum() > 50]
     assert len(visible) >= 12
     for body in visible:

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from pydrake.math import RigidTransform, RotationMatrix
 
-from tangle_drake.pick.motion import PlanningError
 from tangle_drake.planning.arm_motion import ArmMotion
 from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses, symmetric_grasps
+from tangle_drake.planning.motion import PlanningError
 from tangle_drake.planning.trajectory import (
     chain,
     first_violation,

@@ -25,6 +25,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
 from tangle_drake import robot_model
+from tangle_drake.drivers.parallel_jaw import finger_positions, opening
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.robot import (
     GRIPPER_JOINTS,
@@ -33,7 +34,6 @@ from tangle_drake.robot import (
     NEXTAGE_JOINTS,
     RIGHT_ARM,
     add_nextage_with_gripper,
-    gripper_width_to_positions,
 )
 
 WAIST_Z = 0.97
@@ -128,10 +128,14 @@ def test_init_rtm_mirrors_left_arm_and_is_collision_free() -> None:
     assert query.ComputePointPairPenetration() == []
 
 
-def test_gripper_width_to_positions() -> None:
-    assert gripper_width_to_positions(0.03) == pytest.approx((-0.015, 0.015))
+def test_finger_positions_open_the_fingers_symmetrically_and_refuse_impossible_widths() -> None:
+    q = finger_positions(0.03)
+    assert q == pytest.approx([-0.015, 0.015])
+    assert opening(q) == pytest.approx(0.03)
     with pytest.raises(ValueError):
-        gripper_width_to_positions(DEFAULT_GRIPPER.max_opening + 0.001)
+        finger_positions(DEFAULT_GRIPPER.max_opening + 0.001)
+    with pytest.raises(ValueError):
+        finger_positions(-0.001)
 
 
 def _servo_sim(with_wire: bool = False):
@@ -157,7 +161,7 @@ def _servo_sim(with_wire: bool = False):
     context = simulator.get_mutable_context()
 
     def command_width(width: float) -> None:
-        q_left, q_right = gripper_width_to_positions(width)
+        q_left, q_right = finger_positions(width)
         hand.get_mutable_source_value(hand.GetMyContextFromRoot(context)).set_value(
             np.array([q_left, q_right, 0.0, 0.0]))
 

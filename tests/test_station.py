@@ -13,7 +13,7 @@ from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.robot import HOME, LEFT_ARM
 from tangle_drake.scenario import PartCount, load_scenario
-from tangle_drake.station import build_station, camera_model, hold_robot_still
+from tangle_drake.station import build_station, camera_model
 
 STATION_PORTS = {
     "inputs": ["nextage.position", "gripper.position"],
@@ -46,7 +46,7 @@ def test_robot_follows_position_commands_and_the_gripper_opens_and_closes(demo_s
     station = build_station(demo_scenario)
     simulator = Simulator(station)
     context = simulator.get_mutable_context()
-    hold_robot_still(station, context)
+    station.hold_still(context)
     measured = station.GetOutputPort("nextage.position_measured")
     np.testing.assert_allclose(measured.Eval(context), HOME, atol=1e-9)
 

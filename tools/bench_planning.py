@@ -20,8 +20,8 @@ from collections import Counter
 import numpy as np
 from pydrake.math import RigidTransform, RotationMatrix
 
-from tangle_drake.pick.motion import PlanningError
 from tangle_drake.planning.arm_motion import ArmMotion
+from tangle_drake.planning.motion import PlanningError
 from tangle_drake.robot import HOME
 from tangle_drake.scenario import BinConfig
 from tangle_drake.scenario_files import resolve_scenario

@@ -23,7 +23,15 @@ from tangle_drake import __version__
 from tangle_drake.bench.methods import DEFAULT_METHODS, Method, file_digest, parse_method
 from tangle_drake.bench.report import summarize_run, write_report
 from tangle_drake.bench.results import ResultStore
-from tangle_drake.bench.trials import MODES, BenchConfig, PartSpec, TrialWorker, part_scenario
+from tangle_drake.bench.trials import (
+    MODE_SCENARIOS,
+    MODES,
+    BenchConfig,
+    PartSpec,
+    TrialWorker,
+    part_scenario,
+    scenario_mode,
+)
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.pick.diagram import default_graspability_params
@@ -51,7 +59,8 @@ class BenchOptions:
     workers: int | None = None
     ray: str | None = None
     out: Path = DEFAULT_OUT
-    mode: str = "floating"
+    mode: str | None = None
+    """``floating`` or ``arm``; ``None``: the scenario's carrier (``floating`` without one)."""
     seed: int = 0
     scenario: str | Path | None = None
     quick: bool = False
@@ -79,7 +88,7 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
         raise TangleDrakeError(f"--trials must be at least 1, got {trials}")
     if options.workers is not None and options.workers < 1:
         raise TangleDrakeError(f"--workers must be at least 1, got {options.workers}")
-    if options.mode not in MODES:
+    if options.mode is not None and options.mode not in MODES:
         raise TangleDrakeError(f"unknown --mode {options.mode!r}; choose {' or '.join(MODES)}")
     parts = []
     for part in options.parts or (QUICK_PARTS if options.quick else BUILTIN_PARTS):
@@ -104,13 +113,18 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
                            f"({missing[0].model_for(spec.name)}): methods "
                            f"{', '.join(m.name for m in missing)} skipped on it")
         per_part[spec.name] = tuple(m for m in methods if m not in missing)
-    path = scenario_path(options.scenario)
+    path = scenario_path(options.scenario if options.scenario is not None
+                         else MODE_SCENARIOS[options.mode or "floating"])
     try:
         text = path.read_text()
     except OSError as error:
         raise TangleDrakeError(f"cannot read scenario file {path}: {error.strerror}") from error
-    parse_scenario(text, source=str(path))  # a clear error now, not in every worker
-    config = BenchConfig(text, tuple(parts), per_part, options.mode, options.seed,
+    mode = scenario_mode(parse_scenario(text, source=str(path)), str(path))  # errors now
+    if options.mode is not None and options.mode != mode:
+        raise TangleDrakeError(
+            f"--mode {options.mode} disagrees with --scenario {path}, whose carrier makes it "
+            f"{mode} mode: drop --mode, or pass the {MODE_SCENARIOS[options.mode]} scenario")
+    config = BenchConfig(text, tuple(parts), per_part, mode, options.seed,
                          QUICK_PILE_SIZE if options.quick else None)
     return config, trials, notices
 
@@ -152,7 +166,7 @@ def run_bench(options: BenchOptions, say: Callable[[str], None] = print) -> Benc
     todo = [(i, t) for t in range(trials) for i, spec in enumerate(config.parts)
             if (spec.name, t) not in store.trials]
     total = len(config.parts) * trials
-    say(f"benchmark: {len(config.parts)} part(s) x {trials} trial(s), {options.mode} mode, "
+    say(f"benchmark: {len(config.parts)} part(s) x {trials} trial(s), {config.mode} mode, "
         f"into {store.directory}; {total - len(todo)} trial(s) done before, {len(todo)} to run")
     start = time.perf_counter()
     interrupted, workers, new = _run_trials(config, store, todo, total, options)
@@ -164,7 +178,7 @@ def run_bench(options: BenchOptions, say: Callable[[str], None] = print) -> Benc
                        "command again to finish")
     methods = list(dict.fromkeys(m.name for ms in config.methods.values() for m in ms))
     summary = summarize_run(done, names, methods, {
-        "command": options.command, "mode": options.mode, "made_by": f"tangle_drake "
+        "command": options.command, "mode": config.mode, "made_by": f"tangle_drake "
         f"{__version__}", "date": datetime.date.today().isoformat(), "workers": workers,
         "elapsed_s": time.perf_counter() - start, "trials_per_part": trials,
         "new_trials": new, "earlier_trials": len(done) - new,

@@ -20,17 +20,22 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 
 from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
-from tangle_drake.floating_gripper import GantryMotion, build_floating_station
-from tangle_drake.pick.demo import SIM_TIME_PER_PICK, empty_width
-from tangle_drake.pick.diagram import build_pick_diagram
+from tangle_drake.drivers.config import GantryDriver
+from tangle_drake.drivers.registry import carrier
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.pick.demo import SIM_TIME_PER_PICK
+from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
 from tangle_drake.pick.outcome import Outcome, PickRecord
-from tangle_drake.pick.planner import Mode, PickSettings
+from tangle_drake.pick.planner import Mode
 from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
-from tangle_drake.pile import PileDropper, part_bodies
+from tangle_drake.pile import PileDropper
+from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
-from tangle_drake.station import PLANT_NAME, build_station, camera_model
+from tangle_drake.station import build_station, camera_model
 
-MODES = ("floating", "arm")
+MODE_SCENARIOS = {"floating": "floating_gripper.yaml", "arm": "pick_demo.yaml"}
+"""The shipped scenario of each ``--mode``: the gripper on the gantry, or on the Nextage."""
+MODES = tuple(MODE_SCENARIOS)
 RESULTS = ("success", "tangled", "empty", "failure")
 """A pick's result: exactly one part came up, several, none, or nothing was attempted."""
 FAILURES = ("no candidate", "unreachable", "collision", "timeout", "other")
@@ -70,6 +75,15 @@ class BenchConfig:
     seed: int = 0
     pile_size: int | None = None
     """Parts per pile; ``None``: the scenario's count."""
+
+
+def scenario_mode(scenario: Scenario, source: str) -> str:
+    """``floating`` for a scenario whose gripper rides the gantry, ``arm`` for the Nextage."""
+    try:
+        _, config = carrier(scenario.model_drivers)
+    except TangleDrakeError as error:
+        raise TangleDrakeError(f"{source}: the benchmark picks, so {error}") from error
+    return "floating" if isinstance(config, GantryDriver) else "arm"
 
 
 def _stream(seed: int, part: str, trial: int, purpose: int) -> np.random.SeedSequence:
@@ -166,24 +180,19 @@ class TrialWorker:
         scenario = part_scenario(self.config, spec)
         methods = self.config.methods[spec.name]
         floating = self.config.mode == "floating"
-        build = build_floating_station if floating else build_station
-        settings = PickSettings(max_picks=1, empty_width=empty_width(scenario.pile))
+        settings = pick_settings(scenario, max_picks=1)
         if floating:
             # The pile is at rest already, the gantry's stiff servos do not lag behind the
             # descent as the arm does, and nothing is released after the count.
             settings = replace(settings, settle_time=0.05, close_delay=0.05,
                                release_time=_POLL)
-            motion: Any = GantryMotion(scenario.bin, return_home=False)
-        else:
-            from tangle_drake.planning.arm_motion import ArmMotion
-
-            motion = ArmMotion(scenario.bin)
         pick = build_pick_diagram(
-            scenario, TangleChoice(None, FALLBACK_RULE), motion, station=build(scenario),
+            scenario, TangleChoice(None, FALLBACK_RULE),
+            motion_for(scenario, return_home=not floating), station=build_station(scenario),
             settings=settings,
             selection=selection_wiring(methods, spec.name, camera_model(scenario).intrinsics))
         simulator = Simulator(pick.diagram)
-        return _Rig(PileDropper(build(scenario), scenario), pick, simulator,
+        return _Rig(PileDropper(build_station(scenario), scenario), pick, simulator,
                     simulator.get_context().Clone(),
                     FLOATING_SIM_LIMIT if floating else SIM_TIME_PER_PICK,
                     settings.update_period, {m.name: m for m in methods})
@@ -193,22 +202,21 @@ class TrialWorker:
         diagram, station = rig.pick.diagram, rig.pick.station
         context = rig.simulator.get_mutable_context()
         context.SetTimeStateAndParametersFrom(rig.initial)
-        plant = station.GetSubsystemByName(PLANT_NAME)
-        plant.SetPositionsAndVelocities(plant.GetMyMutableContextFromRoot(context), state)
+        station.set_plant_state(context, state)
         diagram.GetInputPort("method").FixValue(context, run)
         depth = station.GetOutputPort("camera.depth_image").Eval(
             station.GetMyContextFromRoot(context))
         # The pile is at rest and nothing touches it until the descent: locked, it costs
         # the contact solver nothing (the approach is a fifth of a floating pick).
-        locked = part_bodies(plant)
+        locked = station.pile_bodies
         for body in locked:
-            body.Lock(plant.GetMyMutableContextFromRoot(context))
+            body.Lock(station.mutable_plant_context(context))
         rig.simulator.Initialize()
         mode = diagram.GetOutputPort("mode")
         while mode.Eval(context) is not Mode.DONE and context.get_time() < rig.sim_limit:
             if locked and mode.Eval(context) not in _UNTOUCHED:
                 for body in locked:
-                    body.Unlock(plant.GetMyMutableContextFromRoot(context))
+                    body.Unlock(station.mutable_plant_context(context))
                 locked = []
             step = rig.update_period if locked else _POLL
             rig.simulator.AdvanceTo(context.get_time() + step)

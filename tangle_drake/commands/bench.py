@@ -31,14 +31,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="metres per mesh unit of mesh parts (0.001 for millimetres)")
     parser.add_argument("--trials", type=int, default=None, metavar="N",
                         help="piles per part (default 50; a later run may raise it)")
-    parser.add_argument("--mode", choices=("floating", "arm"), default="floating",
-                        help="floating: a free-floating gripper (fast; default); arm: the "
-                             "Nextage of the demo")
+    parser.add_argument("--mode", choices=("floating", "arm"), default=None,
+                        help="floating: the gripper on a 4-axis gantry (fast; the default, "
+                             "diagrams/floating_gripper.yaml); arm: the Nextage of the demo "
+                             "(diagrams/pick_demo.yaml); with --scenario, the scenario's "
+                             "carrier decides, and a --mode that disagrees is an error")
     add_worker_arguments(parser, "trials")
     parser.add_argument("--out", type=Path, default=Path("results/bench"),
                         help="results directory (default: results/bench)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the piles (default 0)")
-    add_scenario_argument(parser)
+    add_scenario_argument(parser, "the --mode's: diagrams/floating_gripper.yaml or "
+                                  "diagrams/pick_demo.yaml")
     parser.add_argument("--quick", action="store_true",
                         help="a quick check (for CI): unless given, u_hook only, random and "
                              "graspability, 2 trials; piles of 6 parts")
@@ -52,7 +55,7 @@ def command_line(args: argparse.Namespace) -> str:
     for option in ("methods", "parts"):
         if getattr(args, option) is not None:
             words += [f"--{option}", *getattr(args, option)]
-    for option, default in (("trials", None), ("mode", "floating"), ("seed", 0),
+    for option, default in (("trials", None), ("mode", None), ("seed", 0),
                             ("scenario", None), ("mesh_scale", 1.0)):
         value = getattr(args, option)
         if value != default:

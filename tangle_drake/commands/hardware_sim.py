@@ -43,14 +43,14 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _serve(scenario, args: argparse.Namespace) -> int:
-    from tangle_drake.hardware.config import network_bus_url
+    from tangle_drake.hardware.buses import network_bus_url
     from tangle_drake.hardware.hardware_sim import build_hardware_sim
 
     url = network_bus_url(scenario, "use --check to drive the simulator from this process")
     sim = build_hardware_sim(scenario, seed=args.seed, progress=print)
-    print(f"hardware simulator on {url}: pile of "
-          f"{sim.pile.num_in_bin} parts; commands on {scenario.hardware.nextage_command_channel}"
-          f" and {scenario.hardware.wsg_command_channel}")
+    channels = " and ".join(c.command_channel for c in scenario.model_drivers.values())
+    print(f"hardware simulator on {url}: pile of {sim.pile.num_in_bin} parts; commands on "
+          f"{channels}")
     sim.simulator.set_target_realtime_rate(1.0)
     start = time.perf_counter()
     while sim.simulator.get_context().get_time() < args.duration:
@@ -64,8 +64,9 @@ def _serve(scenario, args: argparse.Namespace) -> int:
 def _check(scenario, seed: int | None) -> int:
     import numpy as np
 
+    from tangle_drake.drivers.registry import carrier
     from tangle_drake.hardware.loop import HardwareInTheLoop
-    from tangle_drake.hardware.scripted import default_target, scripted_controller
+    from tangle_drake.hardware.scripted import scripted_controller, scripted_target
 
     start = time.perf_counter()
     loop = HardwareInTheLoop(scenario, scripted_controller, seed=seed, progress=print)
@@ -80,11 +81,12 @@ def _check(scenario, seed: int | None) -> int:
 
     finished = loop.advance_until(done, CHECK_TIMEOUT)
     report = loop.station.GetOutputPort("safety.report").Eval(station_context)
-    q = loop.station.GetOutputPort("nextage.position_measured").Eval(station_context)
-    error = float(np.max(np.abs(q - default_target())))
+    name, _ = carrier(scenario.model_drivers)
+    q = loop.station.GetOutputPort(f"{name}.position_measured").Eval(station_context)
+    error = float(np.max(np.abs(q - scripted_target(scenario))))
     print(f"scripted motion {'finished' if finished else 'did not finish'} at t = "
-          f"{loop.time:.2f} s ({time.perf_counter() - start:.1f} s wall): arm within "
-          f"{error:.4f} rad of its target, gripper closed to {1e3 * min(widths):.1f} mm and "
+          f"{loop.time:.2f} s ({time.perf_counter() - start:.1f} s wall): {name} within "
+          f"{error:.4f} of its target, gripper closed to {1e3 * min(widths):.1f} mm and "
           f"opened to {1e3 * widths[-1]:.1f} mm; safety {report.mode.value}"
           f"{': ' + report.message if report.message else ''}; malformed status messages "
           f"{sum(report.rejected)}")

@@ -27,10 +27,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def add_scenario_argument(parser: argparse.ArgumentParser) -> None:
+def add_scenario_argument(parser: argparse.ArgumentParser,
+                          default: str = f"the shipped {DEFAULT_SCENARIO}") -> None:
     """The ``--scenario`` option every station command shares."""
-    parser.add_argument("--scenario", default=None,
-                        help=f"scenario YAML (default: the shipped {DEFAULT_SCENARIO})")
+    parser.add_argument("--scenario", default=None, help=f"scenario YAML (default: {default})")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -10,8 +10,13 @@ from __future__ import annotations
 
 from pydrake.common.value import AbstractValue
 from pydrake.lcm import DrakeLcmInterface
-from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem
-from pydrake.systems.lcm import LcmSubscriberSystem, SerializerInterface, _Serializer_
+from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem, OutputPort
+from pydrake.systems.lcm import (
+    LcmPublisherSystem,
+    LcmSubscriberSystem,
+    SerializerInterface,
+    _Serializer_,
+)
 
 from tangle_drake.hardware.messages import Check, Received, ValidatingSerializer
 
@@ -83,3 +88,11 @@ def add_drake_message(builder: DiagramBuilder, name: str, subscriber: LcmSubscri
     converter = builder.AddNamedSystem(f"{name}.message", ToDrakeMessage(lcm_type))
     builder.Connect(subscriber.get_output_port(), converter.get_input_port())
     return converter
+
+
+def add_publisher(builder: DiagramBuilder, name: str, channel: str, lcm_type: type,
+                  lcm: DrakeLcmInterface, period: float, message: OutputPort) -> None:
+    """Publish the C++ message ``message`` on ``channel`` every ``period`` seconds."""
+    publisher = builder.AddNamedSystem(name, LcmPublisherSystem.Make(
+        channel, lcm_type, lcm, publish_period=period, use_cpp_serializer=True))
+    builder.Connect(message, publisher.get_input_port())

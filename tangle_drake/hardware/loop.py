@@ -15,10 +15,11 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context, Diagram
 from pydrake.systems.lcm import LcmBuses
 
+from tangle_drake.hardware.buses import used_buses
 from tangle_drake.hardware.config import IN_PROCESS_URL
 from tangle_drake.hardware.hardware_sim import HardwareSim, build_hardware_sim
-from tangle_drake.hardware.station import build_hardware_station
 from tangle_drake.scenario import Scenario
+from tangle_drake.station import build_hardware_station
 
 ControllerFactory = Callable[[Diagram], Diagram]
 """Builds the controller's root diagram around the given hardware station (e.g. the pick
@@ -33,7 +34,8 @@ class HardwareInTheLoop:
                  progress: Callable[[str], None] | None = None) -> None:
         self.lcm = DrakeLcm(IN_PROCESS_URL)
         buses = LcmBuses()
-        buses.Add(scenario.hardware.lcm_bus, self.lcm)
+        for bus in used_buses(scenario):
+            buses.Add(bus, self.lcm)
         self.period = scenario.hardware.status_period
         self.station = build_hardware_station(scenario, buses)
         self.controller_diagram = make_controller(self.station)

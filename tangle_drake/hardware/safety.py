@@ -22,10 +22,9 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem, State
 
+from tangle_drake.drivers.limits import RobotLimits
 from tangle_drake.hardware.config import HardwareConfig
-from tangle_drake.hardware.limits import RobotLimits
 from tangle_drake.hardware.messages import Received
-from tangle_drake.robot import NEXTAGE_JOINTS
 
 log = logging.getLogger(__name__)
 
@@ -57,7 +56,7 @@ class SafetyReport:
 @dataclass(frozen=True)
 class _State:
     report: SafetyReport = SafetyReport()
-    arm_command: np.ndarray = field(default_factory=lambda: np.zeros(len(NEXTAGE_JOINTS)))
+    arm_command: np.ndarray = field(default_factory=lambda: np.zeros(0))
     gripper_command: float = 0.0
     seen: tuple[int, int] = (0, 0)
     """Valid arm and gripper status counts at the last tick."""
@@ -69,20 +68,24 @@ class _State:
 class SafetySupervisor(LeafSystem):
     """Checks every command against fresh status and the robot's limits, at the command rate.
 
-    Inputs: ``position_desired`` (15), ``gripper_desired`` (1), ``position_measured`` (15),
+    The arm is the gripper's carrier, with ``len(limits.joint_names)`` joints; ``channels``
+    names its status channel and the gripper's, for messages.
+
+    Inputs: ``position_desired`` (n), ``gripper_desired`` (1), ``position_measured`` (n),
     ``gripper_measured`` ([width, rate]), ``arm_status`` and ``gripper_status``
     (:class:`Received` records), ``reset`` (optional, 1). Outputs: ``position_command``,
     ``gripper_command``, ``send`` (1 while commands may go out), ``fault``, ``ready`` (1 while
     commands pass through) and ``report`` (:class:`SafetyReport`).
     """
 
-    def __init__(self, limits: RobotLimits, config: HardwareConfig) -> None:
+    def __init__(self, limits: RobotLimits, config: HardwareConfig,
+                 channels: tuple[str, str]) -> None:
         super().__init__()
-        n = len(NEXTAGE_JOINTS)
+        n = len(limits.joint_names)
         self._limits = limits
         self._period = config.command_period
         self._timeout = config.status_timeout
-        self._channels = (config.nextage_status_channel, config.wsg_status_channel)
+        self._channels = channels
         self._desired = self.DeclareVectorInputPort("position_desired", n)
         self._gripper_desired = self.DeclareVectorInputPort("gripper_desired", 1)
         self._measured = self.DeclareVectorInputPort("position_measured", n)
@@ -91,7 +94,8 @@ class SafetySupervisor(LeafSystem):
             self.DeclareAbstractInputPort("arm_status", AbstractValue.Make(Received())),
             self.DeclareAbstractInputPort("gripper_status", AbstractValue.Make(Received())))
         self._reset = self.DeclareVectorInputPort("reset", 1)
-        self._state = self.DeclareAbstractState(AbstractValue.Make(_State()))
+        self._state = self.DeclareAbstractState(AbstractValue.Make(_State(
+            arm_command=np.zeros(n))))
         self.DeclarePeriodicUnrestrictedUpdateEvent(self._period, 0.0, self._update)
 
         ticket = {self.all_state_ticket()}
@@ -176,18 +180,20 @@ class SafetySupervisor(LeafSystem):
     def _arm_problem(self, q: np.ndarray, previous: np.ndarray) -> str | None:
         limits = self._limits
         if not np.all(np.isfinite(q)):
-            return f"non-finite arm command for {_names(~np.isfinite(q))}"
+            return f"non-finite arm command for {self._names(~np.isfinite(q))}"
         outside = (q < limits.position_lower - _SLACK) | (q > limits.position_upper + _SLACK)
         if outside.any():
             j = int(np.argmax(outside))
-            return (f"command {q[j]:.4f} rad for {NEXTAGE_JOINTS[j]} is outside its limits "
+            return (f"command {q[j]:.4f} {limits.units[j]} for {limits.joint_names[j]} is "
+                    "outside its limits "
                     f"[{limits.position_lower[j]:.4f}, {limits.position_upper[j]:.4f}]")
         speed = np.abs(q - previous) / self._period
         too_fast = speed > limits.velocity + _SLACK / self._period
         if too_fast.any():
             j = int(np.argmax(speed / limits.velocity))
-            return (f"command would move {NEXTAGE_JOINTS[j]} at {speed[j]:.2f} rad/s, above "
-                    f"its limit {limits.velocity[j]:.2f} rad/s")
+            unit = f"{limits.units[j]}/s"
+            return (f"command would move {limits.joint_names[j]} at {speed[j]:.2f} {unit}, "
+                    f"above its limit {limits.velocity[j]:.2f} {unit}")
         return None
 
     def _gripper_problem(self, width: float) -> str | None:
@@ -196,6 +202,6 @@ class SafetySupervisor(LeafSystem):
                     f"{self._limits.gripper_max_width:g}]")
         return None
 
-
-def _names(mask: np.ndarray) -> str:
-    return ", ".join(name for name, bad in zip(NEXTAGE_JOINTS, mask, strict=True) if bad)
+    def _names(self, mask: np.ndarray) -> str:
+        return ", ".join(name for name, bad in zip(self._limits.joint_names, mask, strict=True)
+                         if bad)

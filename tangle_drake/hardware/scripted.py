@@ -1,7 +1,8 @@
 """A scripted controller for checking a station end to end without the pick planner.
 
-It waits for ``safety.ready``, then, starting from the measured pose, moves the left arm part
-of the way to ``init_rtm`` with a smooth profile, closes the gripper, and opens it fully. On
+It waits for ``safety.ready``, then, starting from the measured pose, moves the carrier a
+little with a smooth profile (the Nextage's left arm part of the way to ``init_rtm``, the
+gantry down and round), closes the gripper, and opens it fully. On
 ``safety.fault`` it stops; when ``safety.ready`` comes back (after ``safety.reset``) it starts
 again from the then measured pose. ``tangle-drake hardware-sim --check`` and the tests use it.
 """
@@ -22,8 +23,12 @@ from pydrake.systems.framework import (
     State,
 )
 
+from tangle_drake.drivers.config import NextageDriver
+from tangle_drake.drivers.joint_position import home_positions
+from tangle_drake.drivers.registry import carrier
 from tangle_drake.gripper import DEFAULT_GRIPPER
-from tangle_drake.robot import HOME, INIT_RTM, NEXTAGE_JOINTS
+from tangle_drake.robot import HOME, INIT_RTM
+from tangle_drake.scenario import Scenario
 
 PEAK_SPEED = 0.5 * math.pi / 2
 """Fastest joint speed of the scripted move, rad/s: well under every joint's limit."""
@@ -33,9 +38,21 @@ HOLD_TIME = 0.2
 """Seconds the gripper stays closed."""
 
 
+GANTRY_MOVE = np.array([0.0, 0.0, -0.05, 0.3])
+"""The gantry's scripted move from home: 5 cm down, 0.3 rad round (m, m, m, rad)."""
+
+
 def default_target() -> np.ndarray:
     """HOME with the left arm 40 % of the way to ``init_rtm``: a move in free space."""
     return HOME + 0.4 * (INIT_RTM - HOME)
+
+
+def scripted_target(scenario: Scenario) -> np.ndarray:
+    """Where the scripted move takes the scenario's carrier: a move in free space."""
+    _, config = carrier(scenario.model_drivers)
+    if isinstance(config, NextageDriver):
+        return default_target()
+    return home_positions(config, scenario) + GANTRY_MOVE
 
 
 @dataclass(frozen=True)
@@ -48,13 +65,13 @@ class _Run:
 class ScriptedMotion(LeafSystem):
     """Arm move, gripper close, gripper open; see the module docstring.
 
-    Inputs: ``position_measured`` (15), ``gripper_state`` (2), ``ready`` (1), ``fault`` (1).
-    Outputs: ``position`` (15), ``gripper_position`` (1), ``done`` (1).
+    Inputs: ``position_measured`` (n, the target's size), ``gripper_state`` (2), ``ready``
+    (1), ``fault`` (1). Outputs: ``position`` (n), ``gripper_position`` (1), ``done`` (1).
     """
 
     def __init__(self, target: np.ndarray, open_width: float, period: float) -> None:
         super().__init__()
-        n = len(NEXTAGE_JOINTS)
+        n = len(target)
         self._target = np.asarray(target, dtype=float)
         self._open_width = open_width
         self._measured = self.DeclareVectorInputPort("position_measured", n)
@@ -111,17 +128,19 @@ class ScriptedMotion(LeafSystem):
 
 def scripted_controller(station: Diagram, target: np.ndarray | None = None,
                         open_width: float | None = None, period: float = 0.005) -> Diagram:
-    """The root diagram: ``station`` (a hardware station) driven by :class:`ScriptedMotion`."""
+    """The root diagram: ``station`` (a hardware station) driven by :class:`ScriptedMotion`;
+    ``target`` defaults to :func:`scripted_target` of the station's scenario."""
     builder = DiagramBuilder()
     builder.AddSystem(station)
+    name, _ = carrier(station.scenario.model_drivers)
     script = builder.AddNamedSystem("script", ScriptedMotion(
-        default_target() if target is None else target,
+        scripted_target(station.scenario) if target is None else target,
         DEFAULT_GRIPPER.max_opening if open_width is None else open_width, period))
-    for source, sink in (("nextage.position_measured", "position_measured"),
+    for source, sink in ((f"{name}.position_measured", "position_measured"),
                          ("gripper.state_measured", "gripper_state"),
                          ("safety.ready", "ready"), ("safety.fault", "fault")):
         builder.Connect(station.GetOutputPort(source), script.GetInputPort(sink))
-    builder.Connect(script.GetOutputPort("position"), station.GetInputPort("nextage.position"))
+    builder.Connect(script.GetOutputPort("position"), station.GetInputPort(f"{name}.position"))
     builder.Connect(script.GetOutputPort("gripper_position"),
                     station.GetInputPort("gripper.position"))
     builder.ExportOutput(script.GetOutputPort("done"), "script.done")

@@ -19,22 +19,20 @@ from pydrake.systems.framework import Context, Diagram
 from tangle_drake.bin_model import inside_bin
 from tangle_drake.commands.diagram import write_graphviz
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.hardware.config import IN_PROCESS_URL, network_bus_url
+from tangle_drake.hardware.buses import network_bus_url
+from tangle_drake.hardware.config import IN_PROCESS_URL
 from tangle_drake.hardware.loop import HardwareInTheLoop
 from tangle_drake.parts import load_part
-from tangle_drake.pick.diagram import PickDiagram, build_pick_diagram, thinnest_wire
+from tangle_drake.pick.diagram import PickDiagram, build_pick_diagram, pick_settings
 from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.planner import Mode, PickSettings
 from tangle_drake.pick.selection import TangleChoice, resolve_tangle_choice
-from tangle_drake.pile import drop_pile, part_bodies
-from tangle_drake.planning.arm_motion import ArmMotion
-from tangle_drake.scenario import PartCount, PileConfig, Scenario
+from tangle_drake.pile import drop_pile
+from tangle_drake.planning.motion import Motion
+from tangle_drake.planning.motions import motion_for
+from tangle_drake.scenario import PartCount, Scenario
 from tangle_drake.scenario_files import resolve_scenario
-from tangle_drake.station import PLANT_NAME, build_station, hold_robot_still
-
-EMPTY_FRACTION = 0.25
-"""Fingers closed below this fraction of the wire's diameter hold nothing (the compliant pads
-squeeze a held wire to about half its diameter; empty fingers close to under 1 mm)."""
+from tangle_drake.station import SimulatedStation, build_station
 
 RECORD_FPS = 20.0
 """Frames per second of ``--record``'s replay: smooth enough, and a third of Meshcat's 64
@@ -73,13 +71,6 @@ def with_part(scenario: Scenario, part: str | None) -> Scenario:
     return replace(scenario, pile=pile)
 
 
-def empty_width(pile: PileConfig) -> float:
-    """The gripper opening below which it holds nothing: a fraction of the thinnest wire in
-    the pile (the planner's default for mesh parts, whose wire is unknown)."""
-    wire = thinnest_wire(pile)
-    return PickSettings.empty_width if wire is None else EMPTY_FRACTION * wire
-
-
 def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[PickRecord]:
     """Build, drop a pile, pick ``options.picks`` times; returns the finished picks."""
     if options.picks < 1:
@@ -102,9 +93,10 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     if choice.notice:
         say(choice.notice)
     say(f"selection: rule {choice.rule}" + (f", model {choice.model}" if choice.model else ""))
-    settings = PickSettings(max_picks=options.picks, empty_width=empty_width(scenario.pile))
+    settings = pick_settings(scenario, max_picks=options.picks)
+    motion = motion_for(scenario)  # before any long work: the scenario must have a robot
     if options.hardware:
-        return _run_hardware(options, scenario, choice, settings, say)
+        return _run_hardware(options, scenario, choice, settings, motion, say)
 
     meshcat = None
     if options.meshcat or options.record:
@@ -113,7 +105,7 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     start = time.perf_counter()
     station = build_station(scenario, meshcat)
     pile_state = _settled_pile(station, scenario, options.seed, say)
-    pick = build_pick_diagram(scenario, choice, ArmMotion(scenario.bin), station=station,
+    pick = build_pick_diagram(scenario, choice, motion, station=station,
                               settings=settings, seed=options.seed or 0)
     if options.diagram is not None:
         write_graphviz(pick.diagram.GetGraphvizString(max_depth=1), Path(options.diagram))
@@ -137,7 +129,8 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
 
 
 def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
-                  settings: PickSettings, say: Callable[[str], None]) -> list[PickRecord]:
+                  settings: PickSettings, motion: Motion,
+                  say: Callable[[str], None]) -> list[PickRecord]:
     """The same pick diagram around the hardware station: against the hardware simulator in
     this process over ``memq://`` (``--with-hardware-sim``), or against the robot's drivers on
     the scenario's LCM bus, in real time."""
@@ -145,7 +138,7 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
     built: list[PickDiagram] = []
 
     def make(station: Diagram) -> Diagram:
-        built.append(build_pick_diagram(scenario, choice, ArmMotion(scenario.bin),
+        built.append(build_pick_diagram(scenario, choice, motion,
                                         station=station, settings=settings,
                                         seed=options.seed or 0))
         return built[0].diagram
@@ -174,40 +167,34 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
     return records
 
 
-def parts_in_bin(station: Diagram, context: Context, scenario: Scenario) -> int:
+def parts_in_bin(station: SimulatedStation, context: Context, scenario: Scenario) -> int:
     """Simulation only: how many parts lie in the simulated ``station`` 's bin now (the
     released ones lie outside); ``context`` is its root diagram's."""
-    plant = station.GetSubsystemByName(PLANT_NAME)
-    plant_context = plant.GetMyContextFromRoot(context)
-    return sum(bool(inside_bin(scenario.bin, body.EvalPoseInWorld(plant_context).translation()))
-               for body in part_bodies(plant))
+    return int(inside_bin(scenario.bin, station.part_poses(context)[:, :3, 3]).sum())
 
 
-def _bin_count(station: Diagram, simulator: Simulator, scenario: Scenario,
+def _bin_count(station: SimulatedStation, simulator: Simulator, scenario: Scenario,
                total: int) -> Callable[[], str]:
     """Simulation only: "N of M parts" still in the bin at the time it is called."""
     return lambda: f"{parts_in_bin(station, simulator.get_context(), scenario)} of {total} parts"
 
 
-def _settled_pile(station: Diagram, scenario: Scenario, seed: int | None,
+def _settled_pile(station: SimulatedStation, scenario: Scenario, seed: int | None,
                   say: Callable[[str], None]) -> np.ndarray:
     """Drop the pile in the bare station (the robot held at home); its plant state."""
     simulator = Simulator(station)
-    hold_robot_still(station, simulator.get_mutable_context())
+    station.hold_still(simulator.get_mutable_context())
     simulator.Initialize()
     report = drop_pile(simulator, scenario.bin, scenario.pile, seed=seed)
     say(f"pile: {report.num_in_bin}/{report.num_parts} parts in the bin, settled in "
         f"{report.wall_time:.1f} s")
-    plant = station.GetSubsystemByName(PLANT_NAME)
-    return plant.GetPositionsAndVelocities(plant.GetMyContextFromRoot(simulator.get_context()))
+    return station.plant_state(simulator.get_context())
 
 
 def _simulator(pick: PickDiagram, plant_state: np.ndarray) -> Simulator:
     """A simulator of the pick diagram starting from the settled pile."""
     simulator = Simulator(pick.diagram)
-    context = simulator.get_mutable_context()
-    plant = pick.station.GetSubsystemByName(PLANT_NAME)
-    plant.SetPositionsAndVelocities(plant.GetMyMutableContextFromRoot(context), plant_state)
+    pick.station.set_plant_state(simulator.get_mutable_context(), plant_state)
     simulator.Initialize()
     return simulator
 

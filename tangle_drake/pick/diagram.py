@@ -21,17 +21,18 @@ from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
 from tangle_drake.bin_model import inner_corners
 from tangle_drake.camera import CameraModel
+from tangle_drake.drivers.parallel_jaw import empty_grasp_width
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import FINGER_GRIP_SPAN_M, GraspabilityParams, bin_roi
 from tangle_drake.graspability.system import GraspabilitySystem
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_spec
-from tangle_drake.pick.motion import Motion
 from tangle_drake.pick.outcome import LiftMonitor
 from tangle_drake.pick.planner import PickPlanner, PickSettings
 from tangle_drake.pick.selection import TangleChoice
+from tangle_drake.planning.motion import Motion
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
-from tangle_drake.station import PLANT_NAME, build_station, camera_model
+from tangle_drake.station import SimulatedStation, build_station, camera_model
 
 SelectionWiring = Callable[[DiagramBuilder, OutputPort, OutputPort],
                            tuple[OutputPort, OutputPort]]
@@ -48,7 +49,7 @@ class PickDiagram:
     station: Diagram
     planner: PickPlanner
     monitor: LiftMonitor | None
-    """``None`` on a station without simulation ports."""
+    """``None`` on a station that is not simulated."""
 
 
 def palm_margin_px(camera: CameraModel, bin_config: BinConfig,
@@ -72,6 +73,13 @@ def thinnest_wire(pile: PileConfig) -> float | None:
     wires = [builtin_spec(e.part).wire_diameter * e.mesh_scale for e in pile.parts
              if e.part in BUILTIN_PARTS]
     return min(wires) if wires else None
+
+
+def pick_settings(scenario: Scenario, **overrides) -> PickSettings:
+    """The planner's settings for the scenario's pile: the empty-grasp width of its thinnest
+    wire (:func:`~tangle_drake.drivers.parallel_jaw.empty_grasp_width`), then ``overrides``."""
+    return PickSettings(**{"empty_width": empty_grasp_width(thinnest_wire(scenario.pile)),
+                           **overrides})
 
 
 def default_graspability_params(scenario: Scenario) -> GraspabilityParams:
@@ -153,10 +161,9 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
         builder.Connect(station.GetOutputPort("safety.fault"),
                         planner.GetInputPort("safety.fault"))
     monitor = None
-    if station.HasOutputPort("sim.body_poses"):
-        plant = station.GetSubsystemByName(PLANT_NAME)
+    if isinstance(station, SimulatedStation):
         monitor = builder.AddNamedSystem("lift_monitor (sim only)",
-                                         LiftMonitor(plant, scenario.bin))
+                                         LiftMonitor(station.plant, scenario.bin))
         builder.Connect(station.GetOutputPort("sim.body_poses"),
                         monitor.GetInputPort("body_poses"))
         builder.Connect(monitor.GetOutputPort("lifted_count"),

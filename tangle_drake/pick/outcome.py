@@ -19,8 +19,8 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import BasicVector, Context, LeafSystem
 
-from tangle_drake.pile import part_bodies
 from tangle_drake.scenario import BinConfig
+from tangle_drake.station import part_bodies
 
 
 class Outcome(enum.Enum):

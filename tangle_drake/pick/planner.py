@@ -55,9 +55,10 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
 from pydrake.trajectories import PiecewisePolynomial
 
+from tangle_drake.drivers.parallel_jaw import empty_grasp_width
 from tangle_drake.gripper import DEFAULT_GRIPPER
-from tangle_drake.pick.motion import Motion, PickMotion, PlanningError
 from tangle_drake.pick.outcome import Outcome, PickRecord, Rejection, classify_lift
+from tangle_drake.planning.motion import Motion, PickMotion, PlanningError
 
 
 class Mode(enum.Enum):
@@ -101,9 +102,10 @@ class PickSettings:
     """Hold at the top of the lift before judging, so a loose part has time to drop, s."""
     release_time: float = 0.3
     """From the open command to the return home, s."""
-    empty_width: float = 0.0015
-    """Fingers closed further than this hold nothing, m: a quarter of a 6 mm wire, which the
-    compliant pads squeeze to about half its diameter."""
+    empty_width: float = empty_grasp_width(None)
+    """Fingers closed further than this hold nothing, m (the rule of
+    :func:`~tangle_drake.drivers.parallel_jaw.empty_grasp_width`; ``pick.diagram.pick_settings``
+    gives it for the pile's own wire)."""
     open_width: float = DEFAULT_GRIPPER.max_opening
     """Opening for the approach, m."""
     update_period: float = 0.02

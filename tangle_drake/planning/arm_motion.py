@@ -20,7 +20,6 @@ import numpy as np
 from pydrake.math import RigidTransform
 from pydrake.trajectories import PiecewisePolynomial
 
-from tangle_drake.pick.motion import PickMotion, PlanningError
 from tangle_drake.planning.grasp_poses import (
     ApproachSettings,
     pick_poses,
@@ -28,6 +27,7 @@ from tangle_drake.planning.grasp_poses import (
     symmetric_grasps,
 )
 from tangle_drake.planning.ik import ArmIk, IkSettings
+from tangle_drake.planning.motion import PickMotion, PlanningError
 from tangle_drake.planning.planning_model import PlanningModel
 from tangle_drake.planning.trajectory import (
     chain,

@@ -20,6 +20,7 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder
 
 from tangle_drake.bin_model import bin_sdf
+from tangle_drake.drivers.parallel_jaw import finger_positions
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.paths import make_parser
 from tangle_drake.robot import LEFT_ARM, NEXTAGE_JOINTS, add_nextage_with_gripper
@@ -91,7 +92,7 @@ class PlanningModel:
             width, 0.0, self.spec.max_opening))
         q = np.zeros(self.plant.num_positions())
         self.plant.SetPositionsInArray(self.nextage, np.asarray(nextage_q, float), q)
-        self.plant.SetPositionsInArray(self.gripper, np.array([-width / 2, width / 2]), q)
+        self.plant.SetPositionsInArray(self.gripper, finger_positions(width, self.spec), q)
         return q
 
     def nextage_q(self, q: np.ndarray) -> np.ndarray:

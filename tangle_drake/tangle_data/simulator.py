@@ -21,10 +21,10 @@ from tangle_drake.crops import extract_crop
 from tangle_drake.graspability import GraspabilityParams, GraspCandidate, bin_roi
 from tangle_drake.graspability import compute_candidates as graspability_candidates
 from tangle_drake.parts import load_part
-from tangle_drake.pile import drop_pile, part_bodies
+from tangle_drake.pile import drop_pile
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
 from tangle_drake.scene import render_depth
-from tangle_drake.station import PLANT_NAME, build_station, camera_model, hold_robot_still
+from tangle_drake.station import build_station, camera_model
 from tangle_drake.tangle_data.closing_region import RegionBox, parts_in_region, surface_points
 from tangle_drake.tangle_data.labels import PickLabel, label_pick
 from tangle_drake.tangle_data.lift import ForceLift, LiftResult
@@ -63,11 +63,11 @@ class TangleDataSimulator:
         self.station = build_station(self.scenario)
         self.simulator = Simulator(self.station)
         context = self.simulator.get_mutable_context()
-        hold_robot_still(self.station, context)
+        self.station.hold_still(context)
         self.simulator.Initialize()
         self.initial_context = context.Clone()
-        self.plant = self.station.GetSubsystemByName(PLANT_NAME)
-        self.bodies = part_bodies(self.plant)
+        self.plant = self.station.plant
+        self.bodies = self.station.pile_bodies
         self.camera = camera_model(self.scenario)
         self.roi = bin_roi(self.camera, inner_corners(self.scenario.bin))
         self.params = GraspabilityParams(top_k=settings.top_k)
@@ -75,7 +75,7 @@ class TangleDataSimulator:
         self.region = RegionBox.of_gripper(settings.gripper, settings.labels.region_margin_m)
         self.lifter = ForceLift(self.simulator, self.plant, self.bodies, self.part, self.points,
                                 self.scenario.bin, settings.lift)
-        self.friction = FrictionScaler(self.plant, self.station.GetSubsystemByName("scene_graph"))
+        self.friction = FrictionScaler(self.plant, self.station.scene_graph)
         self.perturbation = Perturbation()
         self.lifts_run = 0
         """Lifts simulated so far (tests check that immediate labels simulate nothing)."""
@@ -157,8 +157,7 @@ class TangleDataSimulator:
 
     def part_poses(self) -> np.ndarray:
         """(N, 4, 4) world poses of the pile's parts in the current state."""
-        plant_context = self.plant.GetMyContextFromRoot(self.simulator.get_context())
-        return np.array([b.EvalPoseInWorld(plant_context).GetAsMatrix4() for b in self.bodies])
+        return self.station.part_poses(self.simulator.get_context())
 
     def lift(self, settled, target: int) -> LiftResult:
         """Restore the settled pile and lift part ``target``."""

@@ -1,0 +1,81 @@
+"""The scenario's drivers, as data: what runs each actuated model, in simulation and over LCM.
+
+As in Drake's ``hardware_sim`` and the ``manipulation`` package, ``Scenario.model_drivers``
+maps a model instance's name to one of these tagged configs:
+
+.. code-block:: yaml
+
+    model_drivers:
+      nextage: !NextageDriver {}
+      gripper: !ParallelJawDriver {force_limit: 40.0}
+
+The station builder (:mod:`tangle_drake.station`) looks each up in
+:mod:`tangle_drake.drivers` and builds its simulated branch or its LCM branch there; both give
+the same ``{model}.{port}`` names. A driver for a new kind of model is a config here and a
+module there, not a change to the station.
+
+No ``from __future__ import annotations``: Drake's YAML loader needs real field types.
+"""
+
+from dataclasses import dataclass
+
+from pydrake.systems.sensors import CameraConfig
+
+from tangle_drake.gripper import DEFAULT_GRIPPER
+
+
+@dataclass
+class JointPositionDriver:
+    """A position-servoed carrier of the gripper: ``{model}.position`` in (one command per
+    joint, in the model's joint order), ``{model}.position_measured`` and
+    ``{model}.state_measured`` ([q, v]) out. Over LCM: ``lcmt_iiwa_command`` /
+    ``lcmt_iiwa_status``, which carry any number of joints."""
+
+    lcm_bus: str = "default"
+    """The bus in the scenario's ``lcm_buses`` that carries both channels."""
+    command_channel: str = ""
+    status_channel: str = ""
+
+
+@dataclass
+class NextageDriver(JointPositionDriver):
+    """The Nextage's 15 joints (``robot.NEXTAGE_JOINTS``), starting at ``robot.HOME``; picks
+    are planned by ``ArmMotion`` (IK and collision checks)."""
+
+    command_channel: str = "NEXTAGE_COMMAND"
+    status_channel: str = "NEXTAGE_STATUS"
+
+
+@dataclass
+class GantryDriver(JointPositionDriver):
+    """The 4-axis gantry of the floating gripper (x, y, z slides, yaw turn), starting parked
+    behind the bin; picks are planned by ``GantryMotion`` (no IK)."""
+
+    command_channel: str = "GANTRY_COMMAND"
+    status_channel: str = "GANTRY_STATUS"
+
+
+@dataclass
+class ParallelJawDriver:
+    """A two-finger parallel gripper: ``{model}.position`` in (the opening between the finger
+    pads, m), ``{model}.state_measured`` ([width, width rate]) out. Over LCM:
+    ``lcmt_schunk_wsg_command`` / ``lcmt_schunk_wsg_status`` (mm, mm/s)."""
+
+    lcm_bus: str = "default"
+    command_channel: str = "WSG_COMMAND"
+    status_channel: str = "WSG_STATUS"
+    force_limit: float = DEFAULT_GRIPPER.grip_force
+    """Grip force limit sent with every command, N."""
+
+
+DriverConfig = NextageDriver | GantryDriver | ParallelJawDriver
+"""Every driver kind a scenario may name (the tag is the class name)."""
+
+CARRIER_DRIVERS = (NextageDriver, GantryDriver)
+"""Drivers of what carries the gripper; a picking station has exactly one."""
+
+
+def camera_channel(config: CameraConfig) -> str:
+    """A camera's ``lcmt_image_array`` channel, named as Drake's camera configs name it (the
+    bus is the camera config's own ``lcm_bus``)."""
+    return f"DRAKE_RGBD_CAMERA_IMAGES_{config.name}"

@@ -1,0 +1,61 @@
+"""The LCM buses a scenario's drivers and camera talk on, and finding them in a diagram."""
+
+from __future__ import annotations
+
+from pydrake.lcm import DrakeLcmInterface
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.lcm import ApplyLcmBusConfig, LcmBuses, LcmInterfaceSystem
+
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.hardware.config import IN_PROCESS_URL
+from tangle_drake.scenario import Scenario
+
+
+def used_buses(scenario: Scenario) -> list[str]:
+    """The names of the buses the scenario's drivers and top camera use, each once."""
+    names = [config.lcm_bus for config in scenario.model_drivers.values()]
+    names.append(scenario.camera.lcm_bus)
+    return list(dict.fromkeys(names))
+
+
+def network_bus_url(scenario: Scenario, instead: str) -> str:
+    """The URL of the scenario's hardware buses, refused if no other process can reach one (a
+    controller or simulator on ``memq://`` alone would wait forever); ``instead`` says what to
+    do then. The first bus's URL is returned."""
+    urls = []
+    for bus in used_buses(scenario):
+        url = scenario.lcm_buses[bus].lcm_url
+        if url.startswith(IN_PROCESS_URL):
+            raise TangleDrakeError(
+                f"the scenario's LCM bus {bus!r} is {url!r}, which no other process can reach; "
+                f"set lcm_buses.{bus}.lcm_url to the robot network's URL (see "
+                f"docs/hardware.md), or {instead}")
+        urls.append(url or "the default LCM URL")
+    return urls[0]
+
+
+class BusFinder:
+    """The LCM instance of each bus name, pumped by the diagram being built.
+
+    Without ``lcm_buses`` the scenario's ``lcm_buses`` are created in the diagram (as Drake's
+    ``hardware_sim`` does); with them, each given instance gets one ``LcmInterfaceSystem``.
+    """
+
+    def __init__(self, scenario: Scenario, builder: DiagramBuilder,
+                 lcm_buses: LcmBuses | None, who: str) -> None:
+        self._who = who
+        self._builder = builder
+        self._pump = lcm_buses is not None
+        self._buses = lcm_buses if lcm_buses is not None else ApplyLcmBusConfig(
+            scenario.lcm_buses, builder)
+        self.instances: list[DrakeLcmInterface] = []
+        """Every distinct instance found so far."""
+
+    def find(self, bus: str) -> DrakeLcmInterface:
+        lcm = self._buses.Find(self._who, bus)
+        if not any(lcm is known for known in self.instances):
+            self.instances.append(lcm)
+            if self._pump:
+                name = "lcm_interface" if len(self.instances) == 1 else f"lcm_interface.{bus}"
+                self._builder.AddNamedSystem(name, LcmInterfaceSystem(lcm))
+        return lcm

@@ -1,0 +1,104 @@
+"""``GantryMotion``: picks for the floating gripper's 4-axis gantry, as the planner's ``Motion``.
+
+The gantry (``models/gantry``: x, y, z slides and a yaw turn, each a PD servo) carries the
+parallel-jaw gripper pointing straight down, so a grasp pose *is* a command: no IK, no arm to
+collide with, straight legs. Fast to plan and to simulate, which is what the benchmark's many
+trials need (``diagrams/floating_gripper.yaml``; ``tools/example_floating_gripper.py``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydrake.math import RigidTransform
+
+from tangle_drake.drivers.joint_position import gantry_home
+from tangle_drake.drivers.limits import RobotLimits
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses
+from tangle_drake.planning.motion import PickMotion, PlanningError
+from tangle_drake.planning.trajectory import MIN_DURATION, chain, hold, rest_to_rest
+from tangle_drake.scenario import BinConfig
+
+VELOCITY = np.array([0.5, 0.5, 0.5, 2.0])
+"""Gantry speeds near the pile and with a part: m/s for the slides, rad/s for the turn."""
+ACCELERATION = np.array([2.0, 2.0, 2.0, 6.0])
+"""m/s², rad/s²."""
+FREE_VELOCITY = np.array([1.0, 1.0, 1.0, 4.0])
+"""Limits of the empty gripper's moves that touch nothing (from home to above the grasp,
+and down to where the slow stretch begins), so they may go faster."""
+FREE_ACCELERATION = np.array([5.0, 5.0, 5.0, 15.0])
+SLOW_SPEED = 0.03
+"""Tool speed over the last and first centimetres at the pile, m/s (the arm's too)."""
+PLACE_DROP = 0.1
+"""The part is released this far below the parked gantry and falls to the floor, m."""
+
+
+class GantryMotion:
+    """``Motion`` for the gantry: a grasp pose *is* a command (no IK), legs are straight.
+
+    ``limits`` are the gantry model's (``drivers.limits.station_limits`` of its scenario): its
+    travel. ``return_home=False`` ends the pick at the top of the lift (the transfer and the
+    way home are empty): enough to count what came up, which is all a benchmark asks.
+    """
+
+    command_size = 4
+    measured_size = 8
+
+    def __init__(self, bin_config: BinConfig, limits: RobotLimits,
+                 approach: ApproachSettings | None = None, return_home: bool = True,
+                 model: str = "gantry") -> None:
+        if len(limits.joint_names) != self.command_size:
+            raise TangleDrakeError(f"the gantry model {model!r} must have 4 joints")
+        self.command_port = f"{model}.position"
+        self.measured_port = f"{model}.state_measured"
+        self.bin = bin_config
+        self.home = gantry_home(bin_config)
+        self.place = self.home[:3] - np.array([0.0, 0.0, PLACE_DROP])
+        self.approach = approach or ApproachSettings()
+        self.return_home = return_home
+        self.lower = limits.position_lower.copy()
+        self.upper = limits.position_upper.copy()
+
+    def hold_command(self, measured: np.ndarray) -> np.ndarray:
+        return np.asarray(measured[:4], float).copy()
+
+    def command_for(self, X_WT: RigidTransform, yaw_near: float) -> np.ndarray:
+        """Gantry coordinates putting T at ``X_WT``, yaw the twin nearer ``yaw_near``."""
+        if X_WT.rotation().col(2)[2] > -0.999:
+            raise PlanningError("unreachable", "the gantry can only point straight down")
+        y_axis = X_WT.rotation().col(1)  # T's y = (sin yaw, -cos yaw, 0) under this weld
+        yaw = math.atan2(y_axis[0], -y_axis[1])
+        twins = [a for a in (yaw, yaw - math.pi, yaw + math.pi)
+                 if self.lower[3] <= a <= self.upper[3]]
+        yaw = min(twins, key=lambda a: abs(a - yaw_near))  # atan2's range: one always fits
+        q = np.array([*X_WT.translation(), yaw])
+        q[2] += DEFAULT_GRIPPER.tcp_offset  # the yaw link sits above T by the TCP offset
+        if np.any(q < self.lower) or np.any(q > self.upper):
+            raise PlanningError("unreachable", "outside the gantry's travel")
+        return q
+
+    def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray) -> PickMotion:
+        q_now = self.hold_command(measured)
+        poses = pick_poses(RigidTransform(np.asarray(X_WT, float)), self.bin, self.approach)
+        pre, slow, grasp, lift = (self.command_for(X, q_now[3]) for X in
+                                  (poses.pregrasp, poses.slow_start, poses.grasp, poses.lift))
+
+        def leg(a: np.ndarray, b: np.ndarray, speed: float = math.inf, free: bool = False):
+            return rest_to_rest(a, b, FREE_VELOCITY if free else VELOCITY,
+                                FREE_ACCELERATION if free else ACCELERATION,
+                                float(np.linalg.norm(b[:3] - a[:3])), speed)
+
+        if self.return_home:
+            place = np.array([*self.place, lift[3]])
+            transfer, home = leg(lift, place), leg(place, self.home)
+        else:
+            transfer = home = hold(lift, MIN_DURATION)
+        return PickMotion(
+            approach=leg(q_now, pre, free=True),
+            descend=chain([leg(pre, slow, free=True), leg(slow, grasp, SLOW_SPEED)]),
+            lift=chain([leg(grasp, slow, SLOW_SPEED), leg(slow, lift)]),
+            transfer=transfer, home=home, X_WT=poses.grasp.GetAsMatrix4())
+

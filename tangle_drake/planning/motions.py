@@ -1,0 +1,33 @@
+"""The ``Motion`` for a scenario's carrier: chosen by its driver, as the station's drivers are."""
+
+from __future__ import annotations
+
+from tangle_drake.drivers.config import GantryDriver, NextageDriver
+from tangle_drake.drivers.limits import station_limits
+from tangle_drake.drivers.registry import carrier
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.planning.motion import Motion
+from tangle_drake.scenario import Scenario
+
+
+def motion_for(scenario: Scenario, *, return_home: bool = True) -> Motion:
+    """The motion planner of the scenario's carrier: ``ArmMotion`` for a ``!NextageDriver``
+    (IK and collision checks), ``GantryMotion`` for a ``!GantryDriver``.
+
+    ``return_home=False`` ends a gantry pick at the top of the lift (the benchmark's count);
+    the arm always returns home.
+    """
+    name, config = carrier(scenario.model_drivers)
+    if isinstance(config, NextageDriver):
+        if name != "nextage":
+            raise TangleDrakeError(f"scenario field 'model_drivers.{name}': the Nextage's arm "
+                                   "motion plans for a model named 'nextage'")
+        from tangle_drake.planning.arm_motion import ArmMotion  # builds a planning plant
+
+        return ArmMotion(scenario.bin)
+    if isinstance(config, GantryDriver):
+        from tangle_drake.planning.gantry_motion import GantryMotion
+
+        return GantryMotion(scenario.bin, station_limits(scenario), return_home=return_home,
+                            model=name)
+    raise TangleDrakeError(f"no motion planner for {type(config).__name__}")
