@@ -18,6 +18,7 @@ from tangle_drake.bench.trials import classify, method_seed, pile_seed
 from tangle_drake.cli import main
 from tangle_drake.crops import CropSpec
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.paths import diagrams_dir
 from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, classify_lift
 from tangle_drake.pile import PileDropper
 from tangle_drake.scenario import PartCount
@@ -248,10 +249,25 @@ def physics(trial: dict) -> dict:
     (dict(workers=0), "--workers must be at least 1"),
     (dict(methods=["random", "random"]), "given twice"),
     (dict(mode="teleport"), "unknown --mode"),
+    (dict(mode="arm", scenario="floating_gripper.yaml"), "--mode arm disagrees with --scenario"),
+    (dict(scenario="pile_only.yaml"), "picking needs a robot"),
 ])
 def test_bad_arguments_are_clear_errors(options, message):
     with pytest.raises(TangleDrakeError, match=message):
         plan(replace(QUICK, **options))
+
+
+@pytest.mark.parametrize(("options", "mode", "scenario"), [
+    (dict(), "floating", "floating_gripper.yaml"),
+    (dict(mode="arm"), "arm", "pick_demo.yaml"),
+    (dict(scenario="pick_demo.yaml"), "arm", "pick_demo.yaml"),
+    (dict(mode="floating", scenario="floating_gripper.yaml"), "floating",
+     "floating_gripper.yaml"),
+])
+def test_the_mode_chooses_the_scenario_and_a_scenario_its_mode(options, mode, scenario):
+    config, _, _ = plan(replace(QUICK, **options))
+    assert config.mode == mode
+    assert config.scenario_text == (diagrams_dir() / scenario).read_text()
 
 
 def test_a_cnn_method_without_a_model_is_an_error_or_left_out_of_the_defaults(

@@ -194,11 +194,18 @@ def test_the_demo_picks_one_part_through_the_hardware_interface():
     assert "parts left in the bin" in lines[-1]
 
 
-def test_hardware_sim_command_checks_in_process_and_refuses_an_unreachable_bus(tmp_path, capsys):
+@pytest.mark.parametrize("carrier", ["nextage", "gantry"])
+def test_hardware_sim_command_checks_in_process_and_refuses_an_unreachable_bus(
+        carrier, tmp_path, capsys):
     scenario = tmp_path / "small.yaml"
-    scenario.write_text(SMALL)
+    text = SMALL if carrier == "nextage" else SMALL.replace(
+        "package://nextage/nextage_with_gripper.dmd.yaml",
+        "package://gantry/floating_gripper.dmd.yaml").replace(
+        "nextage: !NextageDriver", "gantry: !GantryDriver")
+    scenario.write_text(text)
     assert run_command("hardware-sim", "--scenario", str(scenario), "--check") == 0
     out = capsys.readouterr().out
     assert "scripted motion finished" in out and "safety running" in out
+    assert f"{carrier} within 0.00" in out
     with pytest.raises(TangleDrakeError, match="which no other process can reach"):
         run_command("hardware-sim", "--scenario", str(scenario))

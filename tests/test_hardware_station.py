@@ -50,8 +50,10 @@ def _outputs(system):
     return [system.get_output_port(i) for i in range(system.num_output_ports())]
 
 
-def test_hardware_station_has_every_port_of_the_simulated_one_with_the_same_type():
-    scenario = load_scenario(diagrams_dir() / "pick_demo.yaml")
+@pytest.mark.parametrize(("name", "carrier"), [("pick_demo.yaml", "nextage"),
+                                              ("floating_gripper.yaml", "gantry")])
+def test_hardware_station_has_every_port_of_the_simulated_one_with_the_same_type(name, carrier):
+    scenario = load_scenario(diagrams_dir() / name)
     simulated = build_station(scenario)
     hardware = build_station(scenario, hardware=True)
     names = set()
@@ -63,8 +65,8 @@ def test_hardware_station_has_every_port_of_the_simulated_one_with_the_same_type
             assert have.get(name) == kind, name
         assert not any(name.startswith(SIM_ONLY_PREFIX) for name in have)
         names |= set(have)
-    assert {"camera.rgb_image", "camera.depth_image", "nextage.position",
-            "nextage.state_measured", "gripper.position", "gripper.state_measured"} <= names
+    assert {"camera.rgb_image", "camera.depth_image", f"{carrier}.position",
+            f"{carrier}.state_measured", "gripper.position", "gripper.state_measured"} <= names
     assert {"safety.fault", "safety.ready", "safety.report"} <= names
 
 

@@ -9,7 +9,8 @@ from tangle_drake.paths import diagrams_dir
 from tangle_drake.scenario import Scenario, load_scenario, parse_scenario
 
 
-@pytest.mark.parametrize("name", ["pick_demo.yaml", "pile_only.yaml"])
+@pytest.mark.parametrize("name", ["pick_demo.yaml", "floating_gripper.yaml", "pile_only.yaml",
+                                  "tangle_data.yaml"])
 def test_shipped_scenarios_load(name):
     scenario = load_scenario(diagrams_dir() / name)
     assert isinstance(scenario, Scenario)
@@ -45,6 +46,10 @@ camera: {focal: !FovDegrees {y: 40}}
     ("camera: {depth: false}", "camera.depth"),
     ("camera: {width: -640}", "camera"),
     ("no_such_field: 1", "no_such_field"),
+    ("model_drivers: {nextage: {}}", "model_drivers.nextage"),
+    ("model_drivers: {nextage: !TeleportDriver {}}", "model_drivers"),
+    ("model_drivers: {nextage: !NextageDriver {lcm_bus: nowhere}}",
+     "model_drivers.nextage.lcm_bus"),
 ])
 def test_malformed_field_is_named(text, field):
     with pytest.raises(TangleDrakeError, match=re.escape(f"'{field}'")):
@@ -60,3 +65,14 @@ def test_not_a_mapping_or_not_yaml(text):
 def test_missing_file_is_a_clear_error(tmp_path):
     with pytest.raises(TangleDrakeError, match="cannot read scenario file"):
         load_scenario(tmp_path / "nope.yaml")
+
+
+def test_the_two_picking_scenarios_differ_only_in_the_carrier():
+    arm = load_scenario(diagrams_dir() / "pick_demo.yaml")
+    floating = load_scenario(diagrams_dir() / "floating_gripper.yaml")
+    assert [type(d).__name__ for d in arm.model_drivers.values()] == [
+        "NextageDriver", "ParallelJawDriver"]
+    assert [type(d).__name__ for d in floating.model_drivers.values()] == [
+        "GantryDriver", "ParallelJawDriver"]
+    for name in ("bin", "pile", "camera", "camera_height", "plant_config"):
+        assert repr(getattr(arm, name)) == repr(getattr(floating, name)), name

@@ -9,10 +9,11 @@ import pytest
 from pydrake.systems.analysis import Simulator
 
 from tangle_drake.cli import main
+from tangle_drake.errors import TangleDrakeError
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.robot import HOME, LEFT_ARM
-from tangle_drake.scenario import PartCount, load_scenario
+from tangle_drake.scenario import PartCount, load_scenario, parse_scenario
 from tangle_drake.station import build_station, camera_model
 
 STATION_PORTS = {
@@ -63,6 +64,47 @@ def test_robot_follows_position_commands_and_the_gripper_opens_and_closes(demo_s
     simulator.AdvanceTo(1.6)
     width = station.GetOutputPort("gripper.state_measured").Eval(context)[0]
     assert width == pytest.approx(DEFAULT_GRIPPER.max_opening, abs=0.002)
+
+
+def test_the_floating_gripper_is_the_same_station_with_a_gantry_for_carrier():
+    scenario = load_scenario(diagrams_dir() / "floating_gripper.yaml")
+    scenario.pile.parts = [PartCount(part="u_hook", count=2)]
+    station = build_station(scenario)
+    inputs = [station.get_input_port(i).get_name() for i in range(station.num_input_ports())]
+    assert inputs == ["gantry.position", "gripper.position"]
+    assert station.GetOutputPort("gantry.state_measured").size() == 8
+    simulator = Simulator(station)
+    context = simulator.get_mutable_context()
+    station.hold_still(context)
+    home = station.GetOutputPort("gantry.position_measured").Eval(context).copy()
+    np.testing.assert_allclose(home, [scenario.bin.center[0] - 0.25, scenario.bin.center[1],
+                                      1.2, 0.0])
+    target = home + np.array([0.05, -0.05, -0.1, 0.5])
+    station.GetInputPort("gantry.position").FixValue(context, target)
+    simulator.AdvanceTo(1.0)
+    np.testing.assert_allclose(station.GetOutputPort("gantry.position_measured").Eval(context),
+                               target, atol=2e-3)
+    # The gripper hangs straight down from the yaw link, turned with it.
+    X_WG = station.plant.GetBodyByName("gripper_base").EvalPoseInWorld(
+        station.plant_context(context))
+    np.testing.assert_allclose(X_WG.rotation().col(2), [0, 0, -1], atol=1e-3)
+    assert len(station.pile_bodies) == 2
+
+
+@pytest.mark.parametrize(("drivers", "message"), [
+    ("{gripper: !ParallelJawDriver {}}", "model 'nextage' has actuators but no entry"),
+    ("{nextage: !NextageDriver {}, gripper: !ParallelJawDriver {}, arm2: !NextageDriver "
+     "{command_channel: A, status_channel: B}}", "'model_drivers.arm2' names no model"),
+])
+def test_drivers_and_models_must_match(drivers, message):
+    scenario = parse_scenario(f"""
+directives:
+- add_directives: {{file: package://nextage/nextage_with_gripper.dmd.yaml}}
+model_drivers: {drivers}
+pile: {{parts: [{{part: u_hook, count: 1}}]}}
+""")
+    with pytest.raises(TangleDrakeError, match=message):
+        build_station(scenario)
 
 
 def test_camera_model_looks_down_at_the_bin(demo_scenario):
