@@ -1,5 +1,9 @@
 """Random piles: drop the station's parts into the bin and simulate until they are at rest.
 
+:func:`settle_pile` (once) and :class:`PileSettler` (pile after pile on one station) are the
+episode's first half, used by every command that makes a pile; the second half, picking, is
+:mod:`tangle_drake.pick.episode`.
+
 Parts are placed one by one at random poses above the bin, each checked against the bin and
 the parts already placed with SceneGraph's penetration query, so nothing starts interpenetrating.
 After settling, parts that ended outside the bin or deeply inside another are dropped again;
@@ -55,16 +59,52 @@ class PileReport:
         return self.num_parts - len(self.parked)
 
 
-def drop_pile(simulator: Simulator, bin_config: BinConfig, pile_config: PileConfig,
-              seed: int | None = None,
-              progress: Callable[[str], None] | None = None) -> PileReport:
-    """Make a settled random pile in ``simulator``'s context (a station diagram's simulator).
+@dataclass(frozen=True)
+class SettledPile:
+    """A pile at rest: the station plant's positions and velocities, and how it went."""
 
-    The station's input ports must already be fixed (e.g. the robot holding its pose). The same
-    seed on the same station gives the same pile.
-    """
+    state: np.ndarray
+    report: PileReport
+
+
+def settle_pile(station: SimulatedStation, scenario: Scenario, seed: int | None = None,
+                progress: Callable[[str], None] | None = None) -> SettledPile:
+    """Drop a pile (``seed``, else the scenario's) in ``station`` with its drivers holding
+    still, and simulate until it rests. The same seed on the same station gives the same pile."""
+    return PileSettler(station, scenario).settle(seed, progress)
+
+
+class PileSettler:
+    """Drops pile after pile into a station with its drivers holding still, each from the
+    station's initial state, so a pile depends on its seed alone and not on the piles before
+    it. After :meth:`settle`, ``simulator`` holds the settled pile (to render it, or to go on)."""
+
+    def __init__(self, station: SimulatedStation, scenario: Scenario) -> None:
+        self.scenario = scenario
+        self.station = station
+        self.simulator = Simulator(station)
+        context = self.simulator.get_mutable_context()
+        station.hold_still(context)
+        self.simulator.Initialize()
+        self.initial = context.Clone()
+        """The station's state before any pile: what each :meth:`settle` starts from."""
+
+    def settle(self, seed: int | None = None,
+               progress: Callable[[str], None] | None = None) -> SettledPile:
+        """A settled pile made with ``seed`` (default: the scenario's ``pile.seed``)."""
+        self.simulator.get_mutable_context().SetTimeStateAndParametersFrom(self.initial)
+        self.simulator.Initialize()
+        report = _drop(self.simulator, self.station, self.scenario.bin, self.scenario.pile,
+                       seed, progress)
+        return SettledPile(self.station.plant_state(self.simulator.get_context()), report)
+
+
+def _drop(simulator: Simulator, station: SimulatedStation, bin_config: BinConfig,
+          pile_config: PileConfig, seed: int | None,
+          progress: Callable[[str], None] | None) -> PileReport:
+    """Make a settled random pile in ``simulator``'s context (of ``station``, whose command
+    inputs hold still)."""
     seed = pile_config.seed if seed is None else seed
-    station: SimulatedStation = simulator.get_system()
     plant = station.plant
     root = simulator.get_mutable_context()
     bodies = station.pile_bodies
@@ -97,28 +137,6 @@ def drop_pile(simulator: Simulator, bin_config: BinConfig, pile_config: PileConf
         to_drop = failed
     report.wall_time = time.perf_counter() - start
     return report
-
-
-class PileDropper:
-    """Drops pile after pile into a station with its robot held still, each from the station's
-    initial state, so a pile depends on its seed alone and not on the piles before it."""
-
-    def __init__(self, station: SimulatedStation, scenario: Scenario) -> None:
-        self.scenario = scenario
-        self.station = station
-        self.simulator = Simulator(station)
-        context = self.simulator.get_mutable_context()
-        station.hold_still(context)
-        self.simulator.Initialize()
-        self.initial = context.Clone()
-
-    def drop(self, seed: int | None = None) -> tuple[np.ndarray, PileReport]:
-        """A settled pile (``seed`` or the scenario's): the plant's positions and velocities,
-        and how the pile went."""
-        self.simulator.get_mutable_context().SetTimeStateAndParametersFrom(self.initial)
-        self.simulator.Initialize()
-        report = drop_pile(self.simulator, self.scenario.bin, self.scenario.pile, seed)
-        return self.station.plant_state(self.simulator.get_context()), report
 
 
 class _Placer:

@@ -14,7 +14,7 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context, Diagram
 
 from tangle_drake.camera import CameraModel, save_camera_json
-from tangle_drake.pile import PileReport, drop_pile
+from tangle_drake.pile import PileReport, PileSettler
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import SimulatedStation, build_station, camera_model
 
@@ -87,12 +87,11 @@ def make_scene(scenario: Scenario, seed: int | None = None,
     timings: dict[str, float] = {}
     start = time.perf_counter()
     station = build_station(scenario)
-    simulator = Simulator(station)
-    station.hold_still(simulator.get_mutable_context())
-    simulator.Initialize()
+    settler = PileSettler(station, scenario)
     timings["build_station"] = time.perf_counter() - start
 
-    report = drop_pile(simulator, scenario.bin, scenario.pile, seed=seed, progress=progress)
+    report = settler.settle(seed, progress).report
+    simulator = settler.simulator
     timings["settle_pile"] = report.wall_time
 
     start = time.perf_counter()

@@ -20,7 +20,7 @@ from tangle_drake.crops import CropSpec
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, classify_lift
-from tangle_drake.pile import PileDropper
+from tangle_drake.pile import PileSettler
 from tangle_drake.scenario import PartCount
 from tangle_drake.scenario_files import resolve_scenario
 from tangle_drake.station import build_station, part_bodies
@@ -129,10 +129,10 @@ def test_a_trial_seed_depends_on_the_run_seed_part_and_index_only():
 def test_a_pile_depends_on_its_seed_alone():
     scenario = resolve_scenario("floating_gripper.yaml")
     scenario = replace(scenario, pile=replace(scenario.pile, parts=[PartCount("u_hook", 4)]))
-    dropper = PileDropper(build_station(scenario), scenario)
-    first, _ = dropper.drop(7)
-    other, _ = dropper.drop(8)
-    again, _ = dropper.drop(7)
+    settler = PileSettler(build_station(scenario), scenario)
+    first = settler.settle(7).state
+    other = settler.settle(8).state
+    again = settler.settle(7).state
     assert np.array_equal(first, again)
     assert not np.array_equal(first, other)
 

@@ -45,7 +45,7 @@ def flat_ring(centre_W: np.ndarray) -> RigidTransform:
 
 def settle(sim: TangleDataSimulator, poses: list[RigidTransform], seconds: float = 0.5):
     """Place the two rings, let them settle, and return the settled context."""
-    sim.restore(sim.initial_context)
+    sim.restore(sim.settler.initial)
     context = sim.simulator.get_mutable_context()
     plant_context = sim.plant.GetMyMutableContextFromRoot(context)
     for body, X in zip(sim.bodies, poses, strict=True):

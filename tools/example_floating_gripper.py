@@ -22,14 +22,13 @@ import time
 from collections.abc import Sequence
 from dataclasses import replace
 
-from pydrake.systems.analysis import Simulator
 from pydrake.systems.sensors import CameraConfig
 
 from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
+from tangle_drake.pick.episode import PickEpisode
 from tangle_drake.pick.outcome import PickRecord, summarize
-from tangle_drake.pick.planner import Mode
 from tangle_drake.pick.selection import resolve_tangle_choice
-from tangle_drake.pile import PileDropper
+from tangle_drake.pile import settle_pile
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import BinConfig, PartCount, PileConfig, Scenario
 from tangle_drake.scenario_files import resolve_scenario
@@ -59,25 +58,15 @@ def run(picks: int = 2, parts: int = 6, seed: int = 0, model: str | None = None,
     if choice.notice:
         print(choice.notice)
     station = build_station(scenario)
-    state, _ = PileDropper(station, scenario).drop(seed)  # the gantry parked at home
+    pile = settle_pile(station, scenario, seed)  # the gantry parked at home
 
     pick = build_pick_diagram(scenario, choice, motion_for(scenario), station=station,
                               settings=pick_settings(scenario, max_picks=picks), seed=seed)
-    diagram = pick.diagram
-    simulator = Simulator(diagram)
-    context = simulator.get_mutable_context()
-    station.set_plant_state(context, state)
-    simulator.Initialize()
-    mode, records = diagram.GetOutputPort("mode"), diagram.GetOutputPort("picks")
-    shown = 0
-    while mode.Eval(context) is not Mode.DONE and context.get_time() < 30.0 * picks:
-        simulator.AdvanceTo(context.get_time() + 0.5)
-        for record in records.Eval(context)[shown:]:
-            print(record.describe())
-            shown += 1
-    result = list(records.Eval(context))
-    print(f"{summarize(result)}; wall time {time.perf_counter() - start:.0f} s")
-    return result
+    episode = PickEpisode(pick)
+    episode.start(pile.state)
+    run = episode.run(30.0 * picks, on_pick=lambda record: print(record.describe()))
+    print(f"{summarize(run.records)}; wall time {time.perf_counter() - start:.0f} s")
+    return run.records
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
-from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import Context
 
 from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
 from tangle_drake.drivers.config import GantryDriver
@@ -25,10 +25,11 @@ from tangle_drake.drivers.registry import carrier
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.pick.demo import SIM_TIME_PER_PICK
 from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
+from tangle_drake.pick.episode import PickEpisode
 from tangle_drake.pick.outcome import Outcome, PickRecord
 from tangle_drake.pick.planner import Mode
 from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
-from tangle_drake.pile import PileDropper
+from tangle_drake.pile import PileSettler
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
 from tangle_drake.station import build_station, camera_model
@@ -126,12 +127,10 @@ def classify(record: PickRecord | None) -> tuple[str, str | None]:
 
 @dataclass
 class _Rig:
-    """A part's pile dropper and pick diagram, built once per worker."""
+    """A part's pile settler and pick episode, built once per worker."""
 
-    dropper: PileDropper
-    pick: Any
-    simulator: Simulator
-    initial: Any
+    settler: PileSettler
+    episode: PickEpisode
     sim_limit: float
     update_period: float
     """The planner's: while the pile is locked, the driver looks at every update."""
@@ -160,14 +159,16 @@ class TrialWorker:
         rig = self._rig_for(spec)
         seed = pile_seed(self.config.seed, spec.name, trial)
         drop_start, drop_cpu = time.perf_counter(), time.process_time()
-        state, report = rig.dropper.drop(seed)
+        settled = rig.settler.settle(seed)
+        report = settled.report
         pile = {"seed": seed, "parts": report.num_parts, "in_bin": report.num_in_bin,
                 "settled": report.settled, "settle_s": round(report.settle_time, 3),
-                "digest": hashlib.sha256(state.tobytes()).hexdigest()[:16],
+                "digest": hashlib.sha256(settled.state.tobytes()).hexdigest()[:16],
                 "wall_s": time.perf_counter() - drop_start,
                 "cpu_s": time.process_time() - drop_cpu}
         random_seed = method_seed(self.config.seed, spec.name, trial)
-        picks = [self._pick(rig, state, MethodRun(name, random_seed)) for name in rig.methods]
+        picks = [self._pick(rig, settled.state, MethodRun(name, random_seed))
+                 for name in rig.methods]
         return {"part": spec.name, "trial": trial, "pile": pile, "picks": picks,
                 "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
 
@@ -191,41 +192,40 @@ class TrialWorker:
             motion_for(scenario, return_home=not floating), station=build_station(scenario),
             settings=settings,
             selection=selection_wiring(methods, spec.name, camera_model(scenario).intrinsics))
-        simulator = Simulator(pick.diagram)
-        return _Rig(PileDropper(build_station(scenario), scenario), pick, simulator,
-                    simulator.get_context().Clone(),
+        return _Rig(PileSettler(build_station(scenario), scenario), PickEpisode(pick),
                     FLOATING_SIM_LIMIT if floating else SIM_TIME_PER_PICK,
                     settings.update_period, {m.name: m for m in methods})
 
     def _pick(self, rig: _Rig, state: np.ndarray, run: MethodRun) -> dict:
         start, cpu = time.perf_counter(), time.process_time()
-        diagram, station = rig.pick.diagram, rig.pick.station
-        context = rig.simulator.get_mutable_context()
-        context.SetTimeStateAndParametersFrom(rig.initial)
-        station.set_plant_state(context, state)
-        diagram.GetInputPort("method").FixValue(context, run)
-        depth = station.GetOutputPort("camera.depth_image").Eval(
-            station.GetMyContextFromRoot(context))
+        diagram, station = rig.episode.pick.diagram, rig.episode.pick.station
+        depth = []
         # The pile is at rest and nothing touches it until the descent: locked, it costs
         # the contact solver nothing (the approach is a fifth of a floating pick).
         locked = station.pile_bodies
-        for body in locked:
-            body.Lock(station.mutable_plant_context(context))
-        rig.simulator.Initialize()
-        mode = diagram.GetOutputPort("mode")
-        while mode.Eval(context) is not Mode.DONE and context.get_time() < rig.sim_limit:
-            if locked and mode.Eval(context) not in _UNTOUCHED:
+
+        def prepare(context: Context) -> None:
+            diagram.GetInputPort("method").FixValue(context, run)
+            depth.append(station.GetOutputPort("camera.depth_image").Eval(
+                station.GetMyContextFromRoot(context)))
+            for body in locked:
+                body.Lock(station.mutable_plant_context(context))
+
+        def step(mode: Mode) -> float:
+            nonlocal locked
+            if locked and mode not in _UNTOUCHED:
                 for body in locked:
-                    body.Unlock(station.mutable_plant_context(context))
+                    body.Unlock(station.mutable_plant_context(rig.episode.context))
                 locked = []
-            step = rig.update_period if locked else _POLL
-            rig.simulator.AdvanceTo(context.get_time() + step)
-        records = diagram.GetOutputPort("picks").Eval(context)
-        record = records[0] if records else None
+            return rig.update_period if locked else _POLL
+
+        rig.episode.start(state, prepare)
+        result = rig.episode.run(rig.sim_limit, step=step)
+        record = result.records[0] if result.records else None
         return pick_row(run.name, record, {
-            "sim_s": round(context.get_time(), 3), "wall_s": time.perf_counter() - start,
+            "sim_s": round(result.time, 3), "wall_s": time.perf_counter() - start,
             "cpu_s": time.process_time() - cpu,
-            "depth_digest": hashlib.sha256(np.asarray(depth.data).tobytes()).hexdigest()[:16]})
+            "depth_digest": hashlib.sha256(np.asarray(depth[0].data).tobytes()).hexdigest()[:16]})
 
 
 def pick_row(method: str, record: PickRecord | None, extra: dict) -> dict:

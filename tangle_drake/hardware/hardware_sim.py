@@ -23,7 +23,7 @@ from pydrake.systems.lcm import LcmBuses
 from tangle_drake.drivers import camera
 from tangle_drake.drivers.registry import driver_module
 from tangle_drake.hardware.buses import BusFinder
-from tangle_drake.pile import PileReport, drop_pile
+from tangle_drake.pile import PileReport, PileSettler
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import SimulatedStation, build_station
 
@@ -70,11 +70,9 @@ def _settle_pile(station: SimulatedStation, scenario: Scenario, seed: int | None
                  ) -> tuple[PileReport, np.ndarray, dict[str, np.ndarray]]:
     """Drop the pile in ``station`` on its own, before any LCM system exists, so the drop
     sends nothing; returns the report, the plant's state and each driver's held command."""
-    simulator = Simulator(station)
-    station.hold_still(simulator.get_mutable_context())
-    simulator.Initialize()
-    report = drop_pile(simulator, scenario.bin, scenario.pile, seed=seed, progress=progress)
-    plant_context = station.plant_context(simulator.get_context())
+    settler = PileSettler(station, scenario)
+    pile = settler.settle(seed, progress)
+    plant_context = station.plant_context(settler.simulator.get_context())
     held = {name: driver_module(config).held_command(station.plant, plant_context, name)
             for name, config in scenario.model_drivers.items()}
-    return report, station.plant_state(simulator.get_context()), held
+    return pile.report, pile.state, held

@@ -11,23 +11,23 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-import numpy as np
 from pydrake.geometry import Meshcat, MeshcatParams
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context, Diagram
 
 from tangle_drake.bin_model import inside_bin
-from tangle_drake.commands.diagram import write_graphviz
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.graphviz import write_graphviz
 from tangle_drake.hardware.buses import network_bus_url
 from tangle_drake.hardware.config import IN_PROCESS_URL
 from tangle_drake.hardware.loop import HardwareInTheLoop
 from tangle_drake.parts import load_part
 from tangle_drake.pick.diagram import PickDiagram, build_pick_diagram, pick_settings
+from tangle_drake.pick.episode import Clock, PickEpisode, PickRun, RunEnd, run_picks
 from tangle_drake.pick.outcome import PickRecord, summarize
-from tangle_drake.pick.planner import Mode, PickSettings
+from tangle_drake.pick.planner import PickSettings
 from tangle_drake.pick.selection import TangleChoice, resolve_tangle_choice
-from tangle_drake.pile import drop_pile
+from tangle_drake.pile import settle_pile
 from tangle_drake.planning.motion import Motion
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario
@@ -104,19 +104,22 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
         say(f"Meshcat: {meshcat.web_url()}")
     start = time.perf_counter()
     station = build_station(scenario, meshcat)
-    pile_state = _settled_pile(station, scenario, options.seed, say)
+    pile = settle_pile(station, scenario, options.seed)
+    say(f"pile: {pile.report.num_in_bin}/{pile.report.num_parts} parts in the bin, settled in "
+        f"{pile.report.wall_time:.1f} s")
     pick = build_pick_diagram(scenario, choice, motion, station=station,
                               settings=settings, seed=options.seed or 0)
     if options.diagram is not None:
         write_graphviz(pick.diagram.GetGraphvizString(max_depth=1), Path(options.diagram))
         say(f"wrote {options.diagram}")
-    simulator = _simulator(pick, pile_state)
+    episode = PickEpisode(pick)
+    episode.start(pile.state)
     say(f"set-up {time.perf_counter() - start:.1f} s; picking {options.picks} part(s)")
 
     if meshcat is not None and options.record:
         meshcat.StartRecording(RECORD_FPS, set_visualizations_while_recording=options.meshcat)
-    in_bin = _bin_count(station, simulator, scenario, scenario.pile.total_count)
-    records = _run(simulator, pick, options.picks, say, in_bin)
+    in_bin = _bin_count(station, episode.simulator, scenario, scenario.pile.total_count)
+    records = _run(episode.simulator, pick, options.picks, say, in_bin)
     if meshcat is not None and options.record:
         meshcat.StopRecording()
         meshcat.PublishRecording()
@@ -138,9 +141,8 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
     built: list[PickDiagram] = []
 
     def make(station: Diagram) -> Diagram:
-        built.append(build_pick_diagram(scenario, choice, motion,
-                                        station=station, settings=settings,
-                                        seed=options.seed or 0))
+        built.append(build_pick_diagram(scenario, choice, motion, station=station,
+                                        settings=settings, seed=options.seed or 0))
         return built[0].diagram
 
     if options.with_hardware_sim:
@@ -179,49 +181,15 @@ def _bin_count(station: SimulatedStation, simulator: Simulator, scenario: Scenar
     return lambda: f"{parts_in_bin(station, simulator.get_context(), scenario)} of {total} parts"
 
 
-def _settled_pile(station: SimulatedStation, scenario: Scenario, seed: int | None,
-                  say: Callable[[str], None]) -> np.ndarray:
-    """Drop the pile in the bare station (the robot held at home); its plant state."""
-    simulator = Simulator(station)
-    station.hold_still(simulator.get_mutable_context())
-    simulator.Initialize()
-    report = drop_pile(simulator, scenario.bin, scenario.pile, seed=seed)
-    say(f"pile: {report.num_in_bin}/{report.num_parts} parts in the bin, settled in "
-        f"{report.wall_time:.1f} s")
-    return station.plant_state(simulator.get_context())
-
-
-def _simulator(pick: PickDiagram, plant_state: np.ndarray) -> Simulator:
-    """A simulator of the pick diagram starting from the settled pile."""
-    simulator = Simulator(pick.diagram)
-    pick.station.set_plant_state(simulator.get_mutable_context(), plant_state)
-    simulator.Initialize()
-    return simulator
-
-
-def _run(simulator: Simulator | HardwareInTheLoop, pick: PickDiagram, picks: int,
-         say: Callable[[str], None],
+def _run(clock: Clock, pick: PickDiagram, picks: int, say: Callable[[str], None],
          in_bin: Callable[[], str] | None = None) -> list[PickRecord]:
-    """Advance until the planner is done, stopped by the station's safety, or out of time,
-    reporting each pick as it ends; in simulation with what is left in the bin (``in_bin``),
-    so a part that a pick pushed over the wall shows up at that pick."""
-    context = simulator.get_context()
-    mode_port, picks_port = pick.diagram.GetOutputPort("mode"), pick.diagram.GetOutputPort("picks")
-    reported = 0
-    limit = context.get_time() + picks * SIM_TIME_PER_PICK
-    while (mode := mode_port.Eval(context)) is not Mode.DONE:
-        if mode is Mode.STOPPED:
-            report = pick.station.GetOutputPort("safety.report").Eval(
-                pick.station.GetMyContextFromRoot(context))
-            say(f"safety stop: {report.message}; the arm holds its measured pose. Fix the "
-                "cause and run the demo again: it starts from the measured state.")
-            break
-        if context.get_time() >= limit:
-            say(f"stopped: {picks} pick(s) not done after {picks * SIM_TIME_PER_PICK:.0f} s")
-            break
-        simulator.AdvanceTo(context.get_time() + 0.5)
-        records = picks_port.Eval(context)
-        for record in records[reported:]:
-            say(record.describe() + ("" if in_bin is None else f" | {in_bin()} in the bin"))
-        reported = len(records)
-    return list(picks_port.Eval(context))
+    """Run the picks, reporting each as it ends; in simulation with what is left in the bin
+    (``in_bin``), so a part that a pick pushed over the wall shows up at that pick."""
+    run: PickRun = run_picks(clock, pick, picks * SIM_TIME_PER_PICK, on_pick=lambda record: say(
+        record.describe() + ("" if in_bin is None else f" | {in_bin()} in the bin")))
+    if run.end is RunEnd.STOPPED:
+        say(f"safety stop: {run.safety_message}; the arm holds its measured pose. Fix the "
+            "cause and run the demo again: it starts from the measured state.")
+    elif run.end is RunEnd.TIMEOUT:
+        say(f"stopped: {picks} pick(s) not done after {picks * SIM_TIME_PER_PICK:.0f} s")
+    return run.records

@@ -14,14 +14,13 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from pydrake.systems.analysis import Simulator
 
 from tangle_drake.bin_model import inner_corners, inside_bin
 from tangle_drake.crops import extract_crop
 from tangle_drake.graspability import GraspabilityParams, GraspCandidate, bin_roi
 from tangle_drake.graspability import compute_candidates as graspability_candidates
 from tangle_drake.parts import load_part
-from tangle_drake.pile import drop_pile
+from tangle_drake.pile import PileSettler
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
 from tangle_drake.scene import render_depth
 from tangle_drake.station import build_station, camera_model
@@ -61,11 +60,8 @@ class TangleDataSimulator:
         self.scenario = data_scenario(scenario_text, settings)
         self.part = load_part(settings.part, mesh_scale=settings.mesh_scale)
         self.station = build_station(self.scenario)
-        self.simulator = Simulator(self.station)
-        context = self.simulator.get_mutable_context()
-        self.station.hold_still(context)
-        self.simulator.Initialize()
-        self.initial_context = context.Clone()
+        self.settler = PileSettler(self.station, self.scenario)
+        self.simulator = self.settler.simulator
         self.plant = self.station.plant
         self.bodies = self.station.pile_bodies
         self.camera = camera_model(self.scenario)
@@ -143,8 +139,7 @@ class TangleDataSimulator:
 
     def make_pile(self, seed: int):
         """Reset the station and drop a settled pile made with ``seed``."""
-        self.restore(self.initial_context)
-        return drop_pile(self.simulator, self.scenario.bin, self.scenario.pile, seed=seed)
+        return self.settler.settle(seed).report
 
     def restore(self, saved) -> None:
         """Put the simulator back into a saved context's time, state and parameters."""

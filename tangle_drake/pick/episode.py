@@ -1,0 +1,118 @@
+"""The pick episode: a pick diagram started from a settled pile, run until its picks are done.
+
+:func:`run_picks` is the one run-until-done loop: the demo, the benchmark, the hardware loop
+and the example all drive the pick diagram through it. :class:`PickEpisode` holds a pick
+diagram's simulator and restarts it from any settled pile (the benchmark runs every method
+on the same pile that way).
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import Context
+
+from tangle_drake.pick.diagram import PickDiagram
+from tangle_drake.pick.outcome import PickRecord
+from tangle_drake.pick.planner import Mode
+
+POLL = 0.5
+"""Simulated seconds between looks at the planner, s (picks are reported as they end)."""
+
+
+class Clock(Protocol):
+    """What :func:`run_picks` drives: a ``Simulator``, or a ``HardwareInTheLoop``."""
+
+    def get_context(self) -> Context: ...
+
+    def AdvanceTo(self, time: float) -> None: ...
+
+
+class RunEnd(enum.Enum):
+    """Why :func:`run_picks` returned."""
+
+    DONE = "done"
+    """The planner finished: its picks were made, or nothing could be picked."""
+    STOPPED = "safety stop"
+    """The hardware station's safety supervisor stopped the robot."""
+    TIMEOUT = "timeout"
+    """The simulated time allowed ran out first."""
+
+
+@dataclass(frozen=True)
+class PickRun:
+    """What one run of the pick diagram did."""
+
+    records: list[PickRecord]
+    end: RunEnd
+    time: float
+    """Simulated (or, on hardware, the controller's) time at the end, s."""
+    safety_message: str | None = None
+    """The supervisor's reason, for ``STOPPED``."""
+
+
+def run_picks(clock: Clock, pick: PickDiagram, time_limit: float, *,
+              on_pick: Callable[[PickRecord], None] | None = None,
+              step: Callable[[Mode], float] | None = None) -> PickRun:
+    """Advance the pick diagram until its planner is done, the station's safety stops it, or
+    ``time_limit`` simulated seconds have passed.
+
+    ``on_pick`` is called with each pick as it ends; ``step`` says how far to advance next
+    given the planner's mode (default :data:`POLL`).
+    """
+    context = clock.get_context()
+    mode_port = pick.diagram.GetOutputPort("mode")
+    picks_port = pick.diagram.GetOutputPort("picks")
+    limit = context.get_time() + time_limit
+    reported = 0
+    end, message = RunEnd.DONE, None
+    while (mode := mode_port.Eval(context)) is not Mode.DONE:
+        if mode is Mode.STOPPED:
+            end = RunEnd.STOPPED
+            message = pick.station.GetOutputPort("safety.report").Eval(
+                pick.station.GetMyContextFromRoot(context)).message
+            break
+        if context.get_time() >= limit:
+            end = RunEnd.TIMEOUT
+            break
+        clock.AdvanceTo(context.get_time() + (POLL if step is None else step(mode)))
+        if on_pick is not None:
+            records = picks_port.Eval(context)
+            for record in records[reported:]:
+                on_pick(record)
+            reported = len(records)
+    return PickRun(list(picks_port.Eval(context)), end, context.get_time(), message)
+
+
+class PickEpisode:
+    """A pick diagram's simulator, started from a settled pile as often as needed, each time
+    from the diagram's initial state (so a run depends on its pile alone)."""
+
+    def __init__(self, pick: PickDiagram) -> None:
+        self.pick = pick
+        self.simulator = Simulator(pick.diagram)
+        self._initial = self.simulator.get_context().Clone()
+
+    @property
+    def context(self) -> Context:
+        return self.simulator.get_mutable_context()
+
+    def start(self, plant_state: np.ndarray,
+              prepare: Callable[[Context], None] | None = None) -> None:
+        """Reset to the initial state with the station's plant in ``plant_state`` (a
+        ``SettledPile.state``); ``prepare`` may set inputs before the diagram initializes."""
+        context = self.simulator.get_mutable_context()
+        context.SetTimeStateAndParametersFrom(self._initial)
+        self.pick.station.set_plant_state(context, plant_state)
+        if prepare is not None:
+            prepare(context)
+        self.simulator.Initialize()
+
+    def run(self, time_limit: float, **options) -> PickRun:
+        """:func:`run_picks` on this episode's simulator."""
+        return run_picks(self.simulator, self.pick, time_limit, **options)
