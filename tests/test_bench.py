@@ -2,15 +2,19 @@
 resumed run that redoes nothing finished, the command end to end, and bad input refused."""
 
 import json
+import os
+import subprocess
+import sys
 from dataclasses import replace
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 import torch
 from pydrake.math import RigidTransform
 
-from tangle_drake.bench.methods import random_top_k
+from tangle_drake.bench.methods import MethodRun, MethodSelector
 from tangle_drake.bench.report import terminal_summary
 from tangle_drake.bench.results import IDENTITY_FILE, RESULTS_FILE
 from tangle_drake.bench.runner import BenchOptions, plan, run_bench
@@ -18,8 +22,10 @@ from tangle_drake.bench.trials import classify, method_seed, pile_seed
 from tangle_drake.cli import main
 from tangle_drake.crops import CropSpec
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.failures import FailureKind
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, classify_lift
+from tangle_drake.pick.selection import RuleSelector
 from tangle_drake.pile import PileSettler
 from tangle_drake.scenario import PartCount
 from tangle_drake.scenario_files import resolve_scenario
@@ -71,15 +77,17 @@ def test_a_lift_is_judged_by_the_fingers_then_by_the_count():
     (PickRecord(1, Outcome.ONE), ("success", None)),
     (PickRecord(1, Outcome.SEVERAL, lifted=2), ("tangled", None)),
     (PickRecord(1, Outcome.NONE), ("empty", None)),
-    (PickRecord(1, reason="no grasp candidate in the bin"), ("failure", "no candidate")),
-    (PickRecord(1, reason="no candidate can be picked (3 unreachable)"),
-     ("failure", "unreachable")),
-    (PickRecord(1, reason="no candidate can be picked (2 collision)"), ("failure", "collision")),
-    (PickRecord(1, reason="safety stop during approach"), ("failure", "other")),
     (None, ("failure", "timeout")),
+    *[(PickRecord(1, failure=kind, reason="(words only for people)"), ("failure", kind.value))
+      for kind in FailureKind],
 ])
-def test_pick_results_and_failure_causes(record, expected):
+def test_pick_results_and_failure_causes_come_from_the_record_kinds(record, expected):
     assert classify(record) == expected
+
+
+def test_a_held_grasp_is_no_benchmark_result():
+    with pytest.raises(ValueError, match="counted by the simulation"):
+        classify(PickRecord(1, Outcome.HELD))
 
 
 def test_hand_made_end_states_count_the_parts_hanging_from_the_gripper():
@@ -122,8 +130,15 @@ def test_hand_made_end_states_count_the_parts_hanging_from_the_gripper():
 def test_a_trial_seed_depends_on_the_run_seed_part_and_index_only():
     seeds = {pile_seed(0, part, trial) for part in ("u_hook", "c_ring") for trial in range(3)}
     assert len(seeds) == 6
-    assert pile_seed(0, "u_hook", 1) == pile_seed(0, "u_hook", 1) != pile_seed(1, "u_hook", 1)
+    assert pile_seed(0, "u_hook", 1) != pile_seed(1, "u_hook", 1)
     assert method_seed(0, "u_hook", 1) != pile_seed(0, "u_hook", 1)
+    # Another process (another string-hash salt, as a worker has) derives the same seeds.
+    probe = ("from tangle_drake.bench.trials import pile_seed, method_seed; "
+             "print(pile_seed(0, 'u_hook', 1), method_seed(0, 'u_hook', 1))")
+    other = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                           check=True, env={**os.environ, "PYTHONHASHSEED": "123"})
+    assert other.stdout.split() == [str(pile_seed(0, "u_hook", 1)),
+                                    str(method_seed(0, "u_hook", 1))]
 
 
 def test_a_pile_depends_on_its_seed_alone():
@@ -151,16 +166,30 @@ def test_every_method_sees_the_same_piles(quick_run):
     assert trials[0]["picks"][0]["depth_digest"] != trials[1]["picks"][0]["depth_digest"]
 
 
-def test_random_draws_among_the_top_five_reproducibly():
-    class Candidate:
-        def __init__(self, i):
-            self.u, self.v, self.angle_deg, self.score = float(i), 0.0, 0.0, 1.0 - i / 10
-
-    candidates = [Candidate(i) for i in range(10)]
-    draws = [random_top_k(candidates, seed) for seed in range(200)]
-    assert {d.u for d in draws} == {0.0, 1.0, 2.0, 3.0, 4.0}
-    assert random_top_k(candidates, 5) is random_top_k(candidates, 5)
-    assert random_top_k([], 0) is None
+def test_the_bench_and_the_demo_select_alike_without_a_cnn():
+    """The benchmark's method switch and the demo's rule system give the same order, the
+    same ``random`` draw included: both are ``selection.rank``'s."""
+    candidates = [SimpleNamespace(u=float(i), v=2.0 * i, angle_deg=10.0 * i, score=1 - i / 10,
+                                  pose=None) for i in range(8)]
+    switch = MethodSelector([])
+    for name in ("random", "graspability"):
+        for seed in range(6):
+            rule = RuleSelector(name, seed)
+            orders = []
+            for system, extra in ((switch, MethodRun(name, seed)), (rule, None)):
+                context = system.CreateDefaultContext()
+                system.GetInputPort("candidates").FixValue(context, candidates)
+                if extra is not None:
+                    system.GetInputPort("method").FixValue(context, extra)
+                scored = system.GetOutputPort("scored_candidates").Eval(context)
+                selected = system.GetOutputPort("selected_grasp").Eval(context)
+                assert selected is scored[0].candidate
+                orders.append([s.candidate.u for s in scored])
+            assert orders[0] == orders[1]
+            if name == "graspability":
+                assert orders[0] == [float(i) for i in range(8)]
+            else:
+                assert orders[0][0] in range(5)
 
 
 # --- the command, its report, resuming ----------------------------------------------------

@@ -42,8 +42,9 @@ def test_without_a_trained_model_the_graspability_rule_is_used_with_a_notice(tmp
     choice = resolve_tangle_choice("u_hook")
     assert choice.model is None and choice.rule == "graspability"
     assert "no trained tangle model for part 'u_hook'" in choice.notice
-    # Asking for graspability explicitly needs no notice.
+    # Asking for graspability explicitly needs no notice; random needs no model either.
     assert resolve_tangle_choice("u_hook", "graspability").notice is None
+    assert resolve_tangle_choice("u_hook", "random") == selection.TangleChoice(None, "random")
 
 
 def test_a_shipped_model_is_used_with_the_harmonic_rule(tmp_path, monkeypatch):

@@ -9,11 +9,12 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 
+from tangle_drake.failures import FailureKind
 from tangle_drake.pick.outcome import Outcome, summarize
 from tangle_drake.pick.planner import Mode, PickPlanner, PickSettings, rank_scored
 from tangle_drake.planning.motion import PickMotion, PlanningError
 from tangle_drake.planning.trajectory import rest_to_rest
-from tangle_drake.tangle_cnn.system import ScoredCandidate
+from tangle_drake.tangle_cnn.selection import ScoredCandidate
 
 
 @dataclass(frozen=True, eq=False)
@@ -34,15 +35,18 @@ def candidate(index: int, score: float) -> Candidate:
 
 
 class FakeMotion:
-    """A 2-joint manipulator; candidates whose index is in ``unreachable`` cannot be planned."""
+    """A 2-joint manipulator; candidates whose index is in ``unreachable`` cannot be
+    reached, those in ``colliding`` would collide."""
 
     command_port = "arm.position"
     command_size = 2
     measured_port = "arm.state_measured"
     measured_size = 4
 
-    def __init__(self, unreachable: tuple[int, ...] = ()) -> None:
+    def __init__(self, unreachable: tuple[int, ...] = (),
+                 colliding: tuple[int, ...] = ()) -> None:
         self.unreachable = unreachable
+        self.colliding = colliding
         self.planned: list[int] = []
 
     def hold_command(self, measured: np.ndarray) -> np.ndarray:
@@ -51,7 +55,9 @@ class FakeMotion:
     def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray) -> PickMotion:
         index = int(X_WT[0, 3])
         if index in self.unreachable:
-            raise PlanningError("unreachable", f"candidate {index} is out of reach")
+            raise PlanningError(FailureKind.UNREACHABLE, f"candidate {index} is out of reach")
+        if index in self.colliding:
+            raise PlanningError(FailureKind.COLLISION, f"candidate {index} hits the bin")
         self.planned.append(index)
         home, there = np.zeros(2), np.array([0.3, -0.2])
         go, back = (rest_to_rest(home, there, 1.0, 1.5),
@@ -151,6 +157,7 @@ def test_a_safety_fault_fails_the_pick_in_progress_and_the_planner_resumes_once_
     assert modes[4:] == [*PICK_MODES, Mode.DONE]  # a fresh look once the fault cleared
     first, second = records
     assert first.outcome is Outcome.FAILED and first.reason == "safety stop during approach"
+    assert first.failure is FailureKind.SAFETY_STOP
     assert second.outcome is Outcome.ONE
 
 
@@ -181,40 +188,49 @@ def test_an_unreachable_candidate_is_recorded_and_the_next_one_tried():
     assert record.outcome is Outcome.ONE
     assert record.rank == 1 and record.candidate.u == 10.0
     assert [r.rank for r in record.rejected] == [0]
-    assert "unreachable" in record.rejected[0].reason
+    assert record.rejected[0].kind is FailureKind.UNREACHABLE
+    assert record.rejected[0].reason == "unreachable: candidate 0 is out of reach"
+    assert record.failure is None
     assert motion.planned == [1]
 
 
-def test_no_reachable_candidate_fails_the_pick_and_stops():
-    motion = FakeMotion(unreachable=(0, 1))
+@pytest.mark.parametrize(("unreachable", "colliding", "kind", "reason"), [
+    ((0, 1), (), FailureKind.UNREACHABLE, "no candidate can be picked (2 unreachable)"),
+    ((), (0, 1), FailureKind.COLLISION, "no candidate can be picked (2 collision)"),
+    ((1,), (0,), FailureKind.UNREACHABLE,
+     "no candidate can be picked (1 collision, 1 unreachable)"),
+])
+def test_no_plannable_candidate_fails_the_pick_with_its_kind_and_stops(unreachable, colliding,
+                                                                       kind, reason):
+    motion = FakeMotion(unreachable, colliding)
     records, modes, _, _ = run([candidate(0, 0.9), candidate(1, 0.5)], motion, picks=3)
     assert len(records) == 1
     assert records[0].outcome is Outcome.FAILED
-    assert records[0].reason == "no candidate can be picked (2 unreachable)"
+    assert records[0].failure is kind and records[0].reason == reason
     assert modes == [Mode.SETTLE, Mode.PERCEIVE, Mode.DONE]
 
 
 def test_no_candidate_fails_the_pick_and_stops():
     records, modes, _, _ = run([], picks=3)
     assert [r.outcome for r in records] == [Outcome.FAILED]
-    assert "no grasp candidate" in records[0].reason
+    assert records[0].failure is FailureKind.NO_CANDIDATE
     assert modes[-1] is Mode.DONE
 
 
 def test_scored_candidates_set_the_order():
     low, high = candidate(0, 0.9), candidate(1, 0.5)
-    scored = [ScoredCandidate(low, 0.1, 0.2), ScoredCandidate(high, 0.95, 0.7)]
+    scored = [ScoredCandidate(high, 0.95, 0.7), ScoredCandidate(low, 0.1, 0.2)]  # best first
     motion = FakeMotion()
     records, _, _, _ = run([low, high], motion, lifted=1, scored=scored, picks=1)
     assert motion.planned == [1]
     assert records[0].p_not_tangled == pytest.approx(0.95)
 
 
-def test_rank_scored_puts_the_selected_grasp_first():
+def test_rank_scored_keeps_the_selection_order_with_the_selected_grasp_first():
     a, b, c = candidate(0, 0.9), candidate(1, 0.8), candidate(2, 0.7)
-    scored = [ScoredCandidate(a, 0.5, 0.6), ScoredCandidate(b, 0.5, 0.6),
-              ScoredCandidate(c, 0.9, 0.8)]
-    assert [x.u for x, _ in rank_scored(scored)] == [20.0, 0.0, 10.0]  # ties keep the order
+    scored = [ScoredCandidate(c, 0.9, 0.8), ScoredCandidate(a, 0.5, 0.6),
+              ScoredCandidate(b, 0.5, 0.6)]
+    assert [x.u for x, _ in rank_scored(scored)] == [20.0, 0.0, 10.0]
     selected = Candidate(b.u, b.v, b.angle_deg, b.score, b.pose)  # a copy, as ports deliver
     assert [x.u for x, _ in rank_scored(scored, selected)] == [10.0, 20.0, 0.0]
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from pydrake.math import RigidTransform, RotationMatrix
 
+from tangle_drake.failures import FailureKind
 from tangle_drake.planning.arm_motion import ArmMotion
 from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses, symmetric_grasps
 from tangle_drake.planning.motion import PlanningError
@@ -209,7 +210,7 @@ def test_descent_is_straight_and_slow_near_the_part(motion, plan):
 def test_an_unreachable_grasp_is_reported(motion):
     with pytest.raises(PlanningError) as error:
         motion.plan_pick(top_down(0.75, -0.3, 0.95).GetAsMatrix4(), MEASURED_HOME)
-    assert error.value.kind == "unreachable"
+    assert error.value.kind is FailureKind.UNREACHABLE
 
 
 def test_a_grasp_whose_palm_hits_the_wall_is_reported(motion):
@@ -218,4 +219,4 @@ def test_a_grasp_whose_palm_hits_the_wall_is_reported(motion):
     X = top_down(BIN.center[0], wall_y - 0.025, BIN.floor_height + 0.015, 0.0)
     with pytest.raises(PlanningError) as error:
         motion.plan_pick(X.GetAsMatrix4(), MEASURED_HOME)
-    assert error.value.kind == "collision"
+    assert error.value.kind is FailureKind.COLLISION

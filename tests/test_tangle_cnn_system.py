@@ -13,11 +13,12 @@ from pydrake.systems.sensors import ImageDepth32F
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.crops import CropSpec
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.pick.selection import RuleSelector
 from tangle_drake.tangle_cnn.model import TangleModel
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
-from tangle_drake.tangle_cnn.selection import select
-from tangle_drake.tangle_cnn.system import ScoredCandidate, TangleCnnSystem
+from tangle_drake.tangle_cnn.selection import ScoredCandidate, rank
+from tangle_drake.tangle_cnn.system import TangleCnnSystem
 
 INTRINSICS = CameraIntrinsics.from_fov_y(80, 60, 45)
 
@@ -50,9 +51,9 @@ def depth() -> np.ndarray:
     return (0.8 - 0.03 * rng.random((60, 80))).astype(np.float32)
 
 
-def build(model, depth, candidates, rule="harmonic"):
+def build(model, depth, candidates, rule="harmonic", seed=0):
     builder = DiagramBuilder()
-    system = builder.AddSystem(TangleCnnSystem(model, INTRINSICS, rule))
+    system = builder.AddSystem(TangleCnnSystem(model, INTRINSICS, rule, seed))
     image = ImageDepth32F(INTRINSICS.width, INTRINSICS.height)
     image.mutable_data[:, :, 0] = depth
     image_source = builder.AddSystem(ConstantValueSource(AbstractValue.Make(image)))
@@ -69,21 +70,29 @@ def test_scores_every_candidate_and_selects_by_the_rule(model, depth, rule):
     system, context = build(model, depth, CANDIDATES, rule)
     scored = system.GetOutputPort("scored_candidates").Eval(context)
     p = model.predict_candidates(depth, INTRINSICS, CANDIDATES)
-    expected = select(rule, np.array([c.score for c in CANDIDATES]), p)
-    assert [s.candidate for s in scored] == CANDIDATES
+    expected = rank(rule, np.array([c.score for c in CANDIDATES]), p)
+    # Best first, in the rule's order: the order the planner tries them in.
+    assert [s.candidate for s in scored] == [CANDIDATES[i] for i in expected.order]
     assert all(isinstance(s, ScoredCandidate) for s in scored)
-    assert np.allclose([s.p_not_tangled for s in scored], p)
-    assert np.allclose([s.score for s in scored], expected.scores)
+    assert np.allclose([s.p_not_tangled for s in scored], p[expected.order])
+    assert np.allclose([s.score for s in scored], expected.scores[expected.order])
     # Drake copies abstract values between ports: equal, not identical.
-    assert system.GetOutputPort("selected_grasp").Eval(context) == CANDIDATES[expected.index]
+    assert system.GetOutputPort("selected_grasp").Eval(context) == CANDIDATES[expected.order[0]]
 
 
-def test_random_rule_is_a_function_of_the_inputs(model, depth):
-    picks = set()
-    for _ in range(3):
-        system, context = build(model, depth, CANDIDATES, "random")
-        picks.add(system.GetOutputPort("selected_grasp").Eval(context))
-    assert len(picks) == 1 and picks <= set(CANDIDATES)
+def test_random_draws_as_the_rule_selector_does_without_a_cnn(model, depth):
+    """The CNN system and the CNN-free ``RuleSelector`` draw the same candidate per seed (the
+    rule is ``selection.rank``'s in both), and the seed changes the draw."""
+    picks = []
+    for seed in range(8):
+        system, context = build(model, depth, CANDIDATES, "random", seed=seed)
+        drawn = system.GetOutputPort("selected_grasp").Eval(context)
+        selector = RuleSelector("random", seed)
+        selector_context = selector.CreateDefaultContext()
+        selector.GetInputPort("candidates").FixValue(selector_context, CANDIDATES)
+        assert selector.GetOutputPort("selected_grasp").Eval(selector_context) == drawn
+        picks.append(CANDIDATES.index(drawn))
+    assert len(set(picks)) > 1 and max(picks) < 5
 
 
 def test_no_candidates_select_none(model, depth):

@@ -11,36 +11,34 @@ method              the candidate tried first
 ``model:PATH``      the harmonic mean with the checkpoint at PATH (any part of the run)
 =================== ========================================================================
 
-``cnn`` and ``harmonic`` use the shipped model ``tangle_drake/trained/<part>.pt``. If the
-tried candidate cannot be reached the planner goes on down the method's order (graspability's
-after a random draw). One pick diagram serves every method: :class:`MethodSelector` sits
-between perception and the planner and follows the method named on its ``method`` input, so a
-trial restores one settled pile and runs each method on it in turn.
+The rules, what ``random`` draws from and the order the planner tries candidates in are
+:mod:`tangle_drake.tangle_cnn.selection`'s, the same as the demo's. ``cnn`` and ``harmonic``
+use the shipped model ``tangle_drake/trained/<part>.pt``. If the tried candidate cannot be
+reached the planner goes on down the method's order (graspability's after a random draw).
+One pick diagram serves every method: :class:`MethodSelector` sits between perception and the
+planner and follows the method named on its ``method`` input, so a trial restores one settled
+pile and runs each method on it in turn.
 """
 
 from __future__ import annotations
 
 import hashlib
-import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
 
-import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem, OutputPort
 
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.pick.selection import trained_model_path
+from tangle_drake.tangle_cnn.selection import RULES, needs_model, rank_candidates
 
-DEFAULT_METHODS = ("random", "graspability", "cnn", "harmonic")
-RANDOM_TOP_K = 5
-"""The ``random`` method draws among this many of graspability's best candidates."""
+DEFAULT_METHODS = RULES
+"""Every selection rule is a method, under its own name."""
 MODEL_PREFIX = "model:"
-_RULES = {"random": "random", "graspability": "graspability", "cnn": "cnn",
-          "harmonic": "harmonic"}
 
 
 @dataclass(frozen=True)
@@ -55,7 +53,7 @@ class Method:
 
     @property
     def needs_model(self) -> bool:
-        return self.rule in ("cnn", "harmonic")
+        return needs_model(self.rule)
 
     def model_for(self, part: str) -> Path:
         """The checkpoint this method uses on ``part`` (which may not exist)."""
@@ -69,10 +67,10 @@ def parse_method(text: str) -> Method:
         if not path.is_file():
             raise TangleDrakeError(f"method {text!r}: model file not found: {path}")
         return Method(f"{MODEL_PREFIX}{path}", "harmonic", path.resolve())
-    if text not in _RULES:
+    if text not in RULES:
         raise TangleDrakeError(f"unknown method {text!r}; choose from "
                                f"{', '.join(DEFAULT_METHODS)} or model:PATH")
-    return Method(text, _RULES[text])
+    return Method(text, text)
 
 
 def file_digest(path: Path) -> str:
@@ -85,14 +83,6 @@ class MethodRun(NamedTuple):
 
     name: str
     seed: int
-
-
-class _Scored(NamedTuple):
-    """A ``ScoredCandidate`` without a CNN (the planner reads its three fields)."""
-
-    candidate: Any
-    p_not_tangled: float | None
-    score: float
 
 
 class MethodSelector(LeafSystem):
@@ -125,27 +115,17 @@ class MethodSelector(LeafSystem):
         if method.name in self._cnn:
             value.set_value(list(self._cnn[method.name][0].Eval(context)))
         else:
-            value.set_value([_Scored(c, None, float(c.score))
-                             for c in self._candidates.Eval(context)])
+            value.set_value(rank_candidates(method.name, list(self._candidates.Eval(context)),
+                                            seed=method.seed))
 
     def _calc_selected(self, context: Context, value: AbstractValue) -> None:
         method = self._method.Eval(context)
         if method.name in self._cnn:
             value.set_value(self._cnn[method.name][1].Eval(context))
-        elif method.name == "random":
-            value.set_value(random_top_k(list(self._candidates.Eval(context)), method.seed))
         else:
-            value.set_value(None)
-
-
-def random_top_k(candidates: list[Any], seed: int, k: int = RANDOM_TOP_K) -> Any:
-    """One of the first ``k`` candidates, drawn from ``seed`` and the candidates' poses (the
-    same draw however often it is asked for); ``None`` without candidates."""
-    if not candidates:
-        return None
-    poses = np.array([(c.u, c.v, c.angle_deg) for c in candidates[:k]], dtype=np.float64)
-    rng = np.random.default_rng((seed, zlib.crc32(poses.tobytes())))
-    return candidates[int(rng.integers(len(poses)))]
+            scored = rank_candidates(method.name, list(self._candidates.Eval(context)),
+                                     seed=method.seed)
+            value.set_value(scored[0].candidate if scored else None)
 
 
 def selection_wiring(methods: Sequence[Method], part: str, intrinsics: CameraIntrinsics):

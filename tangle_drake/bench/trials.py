@@ -23,6 +23,7 @@ from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
 from tangle_drake.drivers.config import GantryDriver
 from tangle_drake.drivers.registry import carrier
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.failures import FailureKind
 from tangle_drake.pick.demo import SIM_TIME_PER_PICK
 from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
 from tangle_drake.pick.episode import PickEpisode
@@ -39,9 +40,10 @@ MODE_SCENARIOS = {"floating": "floating_gripper.yaml", "arm": "pick_demo.yaml"}
 MODES = tuple(MODE_SCENARIOS)
 RESULTS = ("success", "tangled", "empty", "failure")
 """A pick's result: exactly one part came up, several, none, or nothing was attempted."""
-FAILURES = ("no candidate", "unreachable", "collision", "timeout", "other")
-"""Why a pick failed: no grasp candidate, none the robot could reach or reach without a
-collision, or the pick did not finish within the simulated time allowed."""
+FAILURES = tuple(kind.value for kind in FailureKind)
+"""Why a pick failed (:class:`~tangle_drake.failures.FailureKind`): no grasp candidate, none
+the robot could reach or reach without a collision, ..., or the pick did not finish within the
+simulated time allowed."""
 
 FLOATING_SIM_LIMIT = 20.0
 """Simulated seconds a floating-gripper pick may take (one takes ~5 s)."""
@@ -110,19 +112,17 @@ def part_scenario(config: BenchConfig, spec: PartSpec) -> Scenario:
 
 
 def classify(record: PickRecord | None) -> tuple[str, str | None]:
-    """A pick's result (one of :data:`RESULTS`) and, for a failure, why (:data:`FAILURES`);
-    ``None`` is a pick that did not finish in time."""
+    """A pick's result (one of :data:`RESULTS`) and, for a failure, why (:data:`FAILURES`,
+    the record's ``FailureKind``); ``None`` is a pick that did not finish in time."""
     if record is None:
-        return "failure", "timeout"
-    result = {Outcome.ONE: "success", Outcome.SEVERAL: "tangled",
-              Outcome.NONE: "empty"}.get(record.outcome)
-    if result is not None:
-        return result, None
-    reason = record.reason or ""
-    for mode in ("no grasp candidate", "unreachable", "collision"):
-        if mode in reason:
-            return "failure", "no candidate" if mode == "no grasp candidate" else mode
-    return "failure", "other"
+        return "failure", FailureKind.TIMEOUT.value
+    if record.outcome is Outcome.FAILED:
+        return "failure", record.failure.value
+    results = {Outcome.ONE: "success", Outcome.SEVERAL: "tangled", Outcome.NONE: "empty"}
+    if record.outcome not in results:
+        raise ValueError(f"a benchmark pick must be counted by the simulation, not "
+                         f"{record.outcome.value!r}")
+    return results[record.outcome], None
 
 
 @dataclass

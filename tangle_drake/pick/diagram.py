@@ -29,7 +29,7 @@ from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_spec
 from tangle_drake.pick.outcome import LiftMonitor
 from tangle_drake.pick.planner import PickPlanner, PickSettings
-from tangle_drake.pick.selection import TangleChoice
+from tangle_drake.pick.selection import RuleSelector, TangleChoice
 from tangle_drake.planning.motion import Motion
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
 from tangle_drake.station import SimulatedStation, build_station, camera_model
@@ -151,6 +151,11 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
         builder.Connect(graspability.GetOutputPort("candidates"), cnn.GetInputPort("candidates"))
         for port in ("scored_candidates", "selected_grasp"):
             builder.Connect(cnn.GetOutputPort(port), planner.GetInputPort(port))
+    else:
+        rule = builder.AddNamedSystem("selection", RuleSelector(choice.rule, seed))
+        builder.Connect(graspability.GetOutputPort("candidates"), rule.GetInputPort("candidates"))
+        for port in ("scored_candidates", "selected_grasp"):
+            builder.Connect(rule.GetOutputPort(port), planner.GetInputPort(port))
 
     for port in (motion.measured_port, "gripper.state_measured"):
         builder.Connect(station.GetOutputPort(port), planner.GetInputPort(port))

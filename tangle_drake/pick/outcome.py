@@ -19,6 +19,7 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import BasicVector, Context, LeafSystem
 
+from tangle_drake.failures import FailureKind
 from tangle_drake.scenario import BinConfig
 from tangle_drake.station import part_bodies
 
@@ -40,11 +41,17 @@ class Outcome(enum.Enum):
 
 @dataclass(frozen=True)
 class Rejection:
-    """A candidate the motion planner turned down before the one that was tried."""
+    """A candidate turned down before the one that was tried."""
 
     rank: int
     """Its place in the selection's order (0 = the rule's choice)."""
-    reason: str
+    kind: FailureKind
+    detail: str
+    """For people: what the planner said."""
+
+    @property
+    def reason(self) -> str:
+        return f"{self.kind.value}: {self.detail}"
 
 
 @dataclass
@@ -54,8 +61,10 @@ class PickRecord:
     index: int
     """1 for the first pick of the run."""
     outcome: Outcome = Outcome.FAILED
+    failure: FailureKind | None = None
+    """Why it failed (``FAILED`` only; ``None`` otherwise)."""
     reason: str | None = None
-    """Why it failed (``FAILED`` only)."""
+    """The failure in words, for people (``FAILED`` only)."""
     candidate: Any = None
     """The grasp candidate tried (a ``GraspCandidate``), ``None`` if none was."""
     rank: int | None = None

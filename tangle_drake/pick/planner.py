@@ -29,8 +29,9 @@ port                         dir    value
 ``{motion.measured_port}``   in     the manipulator's measured state (``nextage.state_measured``)
 ``gripper.state_measured``   in     [width, width rate]
 ``candidates``               in     grasp candidates, best first (``GraspabilitySystem``)
-``scored_candidates``        in     optional: ``TangleCnnSystem``'s scored candidates; when
-                                    connected, the order is its rule's, best first
+``scored_candidates``        in     optional: ``TangleCnnSystem``'s scored candidates, in
+                                    its rule's order (best first); when connected, the
+                                    planner tries them in that order
 ``selected_grasp``           in     optional, with ``scored_candidates``: the rule's choice,
                                     tried first
 ``lifted_count``             in     optional, simulation: parts brought up (``LiftMonitor``)
@@ -56,6 +57,7 @@ from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
 from pydrake.trajectories import PiecewisePolynomial
 
 from tangle_drake.drivers.parallel_jaw import empty_grasp_width
+from tangle_drake.failures import FailureKind, pick_failure
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.pick.outcome import Outcome, PickRecord, Rejection, classify_lift
 from tangle_drake.planning.motion import Motion, PickMotion, PlanningError
@@ -266,6 +268,7 @@ class PickPlanner(LeafSystem):
             if s.record is None:
                 return stopped
             record = replace(s.record, outcome=Outcome.FAILED, execution_s=t - s.started,
+                             failure=FailureKind.SAFETY_STOP,
                              reason=f"safety stop during {s.mode.value}")
             return replace(stopped, picks=(*s.picks, record))
         if not fault and s.mode is Mode.STOPPED:
@@ -293,6 +296,7 @@ class PickPlanner(LeafSystem):
             ranked = rank_scored(list(self._scored.Eval(context)), selected)
             record.cnn_s = time.perf_counter() - start
         if not ranked:
+            record.failure = FailureKind.NO_CANDIDATE
             record.reason = "no grasp candidate in the bin"
             return self._finish(replace(s, mode=Mode.SETTLE), record, t)
 
@@ -301,23 +305,26 @@ class PickPlanner(LeafSystem):
         plan = None
         for rank, (candidate, p_not_tangled) in enumerate(ranked):
             if candidate.pose is None:
-                record.rejected.append(Rejection(rank, "no pose: the candidate has no X_WT"))
+                record.rejected.append(Rejection(rank, FailureKind.NO_POSE,
+                                                 "the candidate has no X_WT"))
                 continue
             if self._repeats_empty_grasp(candidate.pose, s.empty_grasps):
-                record.rejected.append(Rejection(rank, "repeat: a grasp there came up empty"))
+                record.rejected.append(Rejection(rank, FailureKind.REPEAT,
+                                                 "a grasp there came up empty"))
                 continue
             try:
                 plan = self._motion.plan_pick(candidate.pose, measured)
             except PlanningError as error:
-                record.rejected.append(Rejection(rank, str(error)))
+                record.rejected.append(Rejection(rank, error.kind, error.detail))
                 continue
             record.candidate, record.rank, record.p_not_tangled = candidate, rank, p_not_tangled
             break
         record.planning_s = time.perf_counter() - start
         if plan is None:
-            kinds = Counter(r.reason.split(":")[0] for r in record.rejected)
+            kinds = Counter(r.kind for r in record.rejected)
+            record.failure = pick_failure(kinds)
             record.reason = "no candidate can be picked (" + ", ".join(
-                f"{n} {kind}" for kind, n in kinds.items()) + ")"
+                f"{n} {kind.value}" for kind, n in kinds.items()) + ")"
             return self._finish(replace(s, mode=Mode.SETTLE), record, t)
         s = replace(s, plan=plan, record=record, started=t, width=self._settings.open_width)
         return self._enter(Mode.APPROACH, s, t)
@@ -337,11 +344,11 @@ class PickPlanner(LeafSystem):
         return replace(record, outcome=outcome, width=width, lifted=lifted)
 
 
-def rank_scored(scored: list[Any], selected: Any = None) -> list[tuple[Any, float]]:
-    """``(candidate, P(not tangled))`` from ``TangleCnnSystem``'s scored candidates, best
-    combined score first (ties keep graspability's order), with ``selected`` at the front."""
-    order = sorted(range(len(scored)), key=lambda i: -scored[i].score)
-    ranked = [(scored[i].candidate, scored[i].p_not_tangled) for i in order]
+def rank_scored(scored: list[Any], selected: Any = None) -> list[tuple[Any, float | None]]:
+    """``(candidate, P(not tangled))`` in the selection's order (``scored_candidates`` are
+    best first, :func:`~tangle_drake.tangle_cnn.selection.rank`), with ``selected`` at the
+    front."""
+    ranked = [(s.candidate, s.p_not_tangled) for s in scored]
     if selected is not None:
         key = (selected.u, selected.v, selected.angle_deg)
         front = [item for item in ranked if (item[0].u, item[0].v, item[0].angle_deg) == key]

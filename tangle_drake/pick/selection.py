@@ -2,7 +2,9 @@
 
 Trained models ship as ``tangle_drake/trained/<part>.pt``. With one (or a ``--model`` file)
 the paper's ``harmonic`` rule is the default; without, picking falls back to the graspability
-index alone and says so, since a rule that needs the CNN cannot run without it.
+index alone and says so, since a rule that needs the CNN cannot run without it. Rules without
+the CNN run in :class:`RuleSelector`; the rules themselves are :mod:`tangle_drake.tangle_cnn.
+selection`'s.
 """
 
 from __future__ import annotations
@@ -10,8 +12,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import Context, LeafSystem
+
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.tangle_cnn.selection import check_rule
+from tangle_drake.tangle_cnn.selection import check_rule, needs_model, rank_candidates
 
 TRAINED_DIR = Path(__file__).resolve().parent.parent / "trained"
 """Where the package's trained models live, one ``<part>.pt`` per part."""
@@ -39,7 +44,8 @@ def resolve_tangle_choice(part: str, rule: str | None = None,
     """The model and rule for picking ``part``.
 
     ``model`` (a checkpoint path) wins; else the shipped ``trained/<part>.pt``; else no model,
-    which allows only the graspability rule. ``rule`` defaults to ``harmonic`` with a model.
+    which allows the rules that need no CNN (``graspability``, the default then, and
+    ``random``). ``rule`` defaults to ``harmonic`` with a model.
     Raises ``TangleDrakeError`` for an unknown rule, a missing ``model`` file, or a rule that
     needs a model when there is none.
     """
@@ -53,12 +59,43 @@ def resolve_tangle_choice(part: str, rule: str | None = None,
     shipped = trained_model_path(part)
     if shipped.is_file():
         return TangleChoice(shipped, rule or "harmonic")
-    if rule not in (None, FALLBACK_RULE):
+    if rule is not None and needs_model(rule):
         raise TangleDrakeError(
             f"rule {rule!r} needs a tangle model, and there is none for part {part!r} "
             f"({shipped} does not exist): pass --model PATH, or --rule {FALLBACK_RULE}")
-    notice = None if rule == FALLBACK_RULE else (
+    if rule is not None:
+        return TangleChoice(None, rule)
+    notice = (
         f"notice: no trained tangle model for part {part!r} ({shipped} does not exist); "
         f"selecting by the {FALLBACK_RULE} index alone. Train one with `tangle-drake train` "
         f"and pass --model, or install it there, for the paper's harmonic rule.")
     return TangleChoice(None, FALLBACK_RULE, notice)
+
+
+class RuleSelector(LeafSystem):
+    """A selection rule that needs no CNN (``graspability``, ``random``) as a Drake system:
+    ``candidates`` in; ``scored_candidates`` (best first) and ``selected_grasp`` out, as
+    ``TangleCnnSystem`` gives them, with P(not tangled) ``None``."""
+
+    def __init__(self, rule: str, seed: int = 0) -> None:
+        super().__init__()
+        if needs_model(rule):
+            raise TangleDrakeError(f"rule {rule!r} needs the tangle CNN (TangleCnnSystem)")
+        self._rule = rule
+        self._seed = seed
+        candidates = self.DeclareAbstractInputPort("candidates", AbstractValue.Make([]))
+        self.DeclareAbstractOutputPort("scored_candidates", lambda: AbstractValue.Make([]),
+                                       self._calc_scored, {candidates.ticket()})
+        self.DeclareAbstractOutputPort("selected_grasp", lambda: AbstractValue.Make(None),
+                                       self._calc_selected, {candidates.ticket()})
+
+    def _scored(self, context: Context) -> list:
+        return rank_candidates(self._rule, list(self.get_input_port().Eval(context)),
+                               seed=self._seed)
+
+    def _calc_scored(self, context: Context, value: AbstractValue) -> None:
+        value.set_value(self._scored(context))
+
+    def _calc_selected(self, context: Context, value: AbstractValue) -> None:
+        scored = self._scored(context)
+        value.set_value(scored[0].candidate if scored else None)

@@ -20,6 +20,7 @@ import numpy as np
 from pydrake.math import RigidTransform
 from pydrake.trajectories import PiecewisePolynomial
 
+from tangle_drake.failures import FailureKind
 from tangle_drake.planning.grasp_poses import (
     ApproachSettings,
     pick_poses,
@@ -119,7 +120,7 @@ class ArmMotion:
             except PlanningError as error:
                 errors.append(error)
         # A twin that got as far as a collision says more than one that was out of reach.
-        raise next((e for e in errors if e.kind == "collision"), errors[0])
+        raise next((e for e in errors if e.kind is FailureKind.COLLISION), errors[0])
 
     def _plan(self, X_grasp: RigidTransform, q_now: np.ndarray) -> PickMotion:
         poses = pick_poses(X_grasp, self.bin, self.settings.approach, self.model.spec)
@@ -155,7 +156,7 @@ class ArmMotion:
         """
         q = self.ik.solve(X_WT, seed, free_yaw=free_yaw)
         if q is None:
-            raise PlanningError("unreachable", f"no IK solution for the {name} pose")
+            raise PlanningError(FailureKind.UNREACHABLE, f"no IK solution for the {name} pose")
         if self._is_clear(q, free):
             return q
         if free_yaw or self.ik.settings.use_chest:
@@ -164,7 +165,7 @@ class ArmMotion:
             q = self.ik.solve(X_WT, seed, free_yaw=free_yaw, min_distance=bound + _BOUND_MARGIN)
             if q is not None and self._is_clear(q, free):
                 return q
-        raise PlanningError("collision", f"the {name} pose hits the bin or the robot")
+        raise PlanningError(FailureKind.COLLISION, f"the {name} pose hits the bin or the robot")
 
     def _is_clear(self, q: np.ndarray, free: bool) -> bool:
         s = self.settings
@@ -179,7 +180,7 @@ class ArmMotion:
             if candidate is not None and first_violation(
                     candidate, self.settings.free_step, lambda q: self._is_clear(q, True)) is None:
                 return candidate
-        raise PlanningError("collision", f"the {name} move hits the bin or the robot")
+        raise PlanningError(FailureKind.COLLISION, f"the {name} move hits the bin or the robot")
 
     def _straight(self, q0: np.ndarray, q1: np.ndarray, name: str,
                   depth: int = 0) -> list[np.ndarray]:
@@ -190,12 +191,12 @@ class ArmMotion:
             X_mid = RigidTransform(self.model.tcp_pose(q0).rotation(), (p0 + p1) / 2)
             q_mid = self.ik.solve(X_mid, (q0 + q1) / 2)
             if q_mid is None:
-                raise PlanningError("unreachable", f"no IK solution along the {name}")
+                raise PlanningError(FailureKind.UNREACHABLE, f"no IK solution along the {name}")
             return (self._straight(q0, q_mid, name, depth + 1)[:-1]
                     + self._straight(q_mid, q1, name, depth + 1))
         if first_violation([q0, q1], self.settings.near_step,
                            lambda q: self._is_clear(q, False)) is not None:
-            raise PlanningError("collision", f"the {name} hits the bin or the robot")
+            raise PlanningError(FailureKind.COLLISION, f"the {name} hits the bin or the robot")
         return [q0, q1]
 
     def _deviation(self, q0: np.ndarray, q1: np.ndarray, p0: np.ndarray,

@@ -16,6 +16,7 @@ from pydrake.math import RigidTransform
 from tangle_drake.drivers.joint_position import gantry_home
 from tangle_drake.drivers.limits import RobotLimits
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.failures import FailureKind
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses
 from tangle_drake.planning.motion import PickMotion, PlanningError
@@ -68,7 +69,7 @@ class GantryMotion:
     def command_for(self, X_WT: RigidTransform, yaw_near: float) -> np.ndarray:
         """Gantry coordinates putting T at ``X_WT``, yaw the twin nearer ``yaw_near``."""
         if X_WT.rotation().col(2)[2] > -0.999:
-            raise PlanningError("unreachable", "the gantry can only point straight down")
+            raise PlanningError(FailureKind.UNREACHABLE, "the gantry can only point straight down")
         y_axis = X_WT.rotation().col(1)  # T's y = (sin yaw, -cos yaw, 0) under this weld
         yaw = math.atan2(y_axis[0], -y_axis[1])
         twins = [a for a in (yaw, yaw - math.pi, yaw + math.pi)
@@ -77,7 +78,7 @@ class GantryMotion:
         q = np.array([*X_WT.translation(), yaw])
         q[2] += DEFAULT_GRIPPER.tcp_offset  # the yaw link sits above T by the TCP offset
         if np.any(q < self.lower) or np.any(q > self.upper):
-            raise PlanningError("unreachable", "outside the gantry's travel")
+            raise PlanningError(FailureKind.UNREACHABLE, "outside the gantry's travel")
         return q
 
     def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray) -> PickMotion:

@@ -3,8 +3,8 @@
 The state machine (``PickPlanner``) decides *when* to move; a ``Motion`` decides *how*: it
 names the command and measurement ports of its manipulator and plans one whole pick for a
 grasp pose. The Nextage arm's ``ArmMotion`` (IK, collision checks, joint trajectories) is one;
-a free-floating gripper that takes pose commands directly is another
-(``tangle_drake.floating_gripper``'s ``GantryMotion``).
+the gantry's free-floating gripper, which takes pose commands directly, is another
+(:mod:`tangle_drake.planning.gantry_motion`).
 """
 
 from __future__ import annotations
@@ -15,14 +15,16 @@ from typing import Protocol
 import numpy as np
 from pydrake.trajectories import PiecewisePolynomial
 
+from tangle_drake.failures import FailureKind
+
 
 class PlanningError(Exception):
     """A grasp the manipulator cannot execute; the planner records it and tries the next one."""
 
-    def __init__(self, kind: str, detail: str) -> None:
-        super().__init__(f"{kind}: {detail}")
+    def __init__(self, kind: FailureKind, detail: str) -> None:
+        super().__init__(f"{kind.value}: {detail}")
         self.kind = kind
-        """``unreachable`` (no IK solution within the limits) or ``collision``."""
+        """``UNREACHABLE`` (no IK solution within the limits) or ``COLLISION``."""
         self.detail = detail
 
 

@@ -1,7 +1,11 @@
-"""Which grasp candidate to pick: the paper's rule and the baselines it is compared with.
+"""Which grasp candidate to pick: the paper's rule and the baselines, the one place for both.
 
-Rules (``RULES``), over the candidates of one image (the graspability top-k):
+Rules (``RULES``), over the candidates of one image (graspability's top-k, best first):
 
+- ``random``: one of the first :data:`RANDOM_TOP_K` candidates, drawn from the seed and the
+  candidates' poses (the same draw however often it is asked for; a benchmark baseline that
+  knows nothing but where a grasp is possible); its "combined score" is each candidate's
+  chance of being drawn;
 - ``graspability``: the highest graspability score (the method without the CNN);
 - ``cnn``: the highest P(not tangled);
 - ``harmonic`` (the paper): the highest harmonic mean ``2 g p / (g + p)`` of the normalised
@@ -9,31 +13,47 @@ Rules (``RULES``), over the candidates of one image (the graspability top-k):
   among the image's candidates, ``g = score / max(score)``, so the best candidate has ``g = 1``
   and both terms lie in [0, 1] whatever the index's absolute scale. A zero in either term
   gives 0 (a grasp that cannot close or surely tangles is never preferred); all-zero scores
-  give ``g = 0`` for all;
-- ``random``: uniform among the candidates, from a seeded generator (a benchmark baseline);
-  its "combined score" is each candidate's chance of being drawn, ``1 / N``.
+  give ``g = 0`` for all.
 
-Ties go to the candidate that is better on the other term (P(not tangled) for
-``graspability``, graspability for ``cnn`` and ``harmonic``), then to the earlier one.
-Numpy only.
+:func:`rank` orders every candidate, best first, which is the order the planner tries them
+in: by the rule's score; ties go to the candidate that is better on the other term
+(P(not tangled) for ``graspability``, where known, graspability for ``cnn`` and ``harmonic``),
+then to the earlier one. After ``random``'s draw come the others in graspability's order.
+Only ``cnn`` and ``harmonic`` need the tangle CNN (:data:`MODEL_RULES`). Numpy only.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+import zlib
+from collections.abc import Sequence
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from tangle_drake.errors import TangleDrakeError
 
-RULES = ("graspability", "cnn", "harmonic", "random")
+RULES = ("random", "graspability", "cnn", "harmonic")
+MODEL_RULES = ("cnn", "harmonic")
+"""The rules that need P(not tangled), hence a trained tangle CNN."""
+RANDOM_TOP_K = 5
+"""``random`` draws among this many of graspability's best candidates."""
 
 
-class Selection(NamedTuple):
-    index: int | None
-    """The chosen candidate; ``None`` when there are no candidates."""
+class Ranking(NamedTuple):
+    order: np.ndarray
+    """Candidate indices, best first (all of them; empty without candidates)."""
     scores: np.ndarray
-    """Each candidate's combined score under the rule, (N,) float64."""
+    """Each candidate's combined score under the rule, (N,) float64, in candidate order."""
+
+
+class ScoredCandidate(NamedTuple):
+    """A candidate with what the selection made of it (the planner reads the three fields)."""
+
+    candidate: Any
+    p_not_tangled: float | None
+    """The CNN's estimate; ``None`` where no CNN ran."""
+    score: float
+    """The rule's combined score."""
 
 
 def check_rule(rule: str) -> str:
@@ -43,33 +63,53 @@ def check_rule(rule: str) -> str:
     return rule
 
 
+def needs_model(rule: str) -> bool:
+    """Whether ``rule`` needs the tangle CNN's P(not tangled)."""
+    return check_rule(rule) in MODEL_RULES
+
+
 def normalised_graspability(scores: np.ndarray) -> np.ndarray:
     """Scores divided by the best of them (all zeros when the best is not positive)."""
     best = scores.max(initial=0.0)
     return scores / best if best > 0 else np.zeros_like(scores)
 
 
-def select(rule: str, graspability: np.ndarray, p_not_tangled: np.ndarray,
-           rng: np.random.Generator | None = None) -> Selection:
-    """The candidate ``rule`` picks and every candidate's combined score.
+def random_draw(poses: np.ndarray, seed: int) -> int | None:
+    """The index ``random`` draws: one of the first :data:`RANDOM_TOP_K` rows of ``poses``
+    ((N, 3): u, v, angle of each candidate), from ``seed`` and those rows."""
+    top = np.ascontiguousarray(np.asarray(poses, dtype=np.float64)[:RANDOM_TOP_K])
+    if len(top) == 0:
+        return None
+    rng = np.random.default_rng((seed, zlib.crc32(top.tobytes())))
+    return int(rng.integers(len(top)))
 
-    ``graspability`` (N,) are non-negative index scores, ``p_not_tangled`` (N,) the CNN's
-    probabilities; ``rng`` is required by ``random`` only.
+
+def rank(rule: str, graspability: np.ndarray, p_not_tangled: np.ndarray | None = None,
+         poses: np.ndarray | None = None, seed: int = 0) -> Ranking:
+    """Every candidate in the order ``rule`` prefers them, and their combined scores.
+
+    ``graspability`` (N,) are non-negative index scores in the candidates' order (best
+    first), ``p_not_tangled`` (N,) the CNN's probabilities (``None`` without a CNN: only
+    ``random`` and ``graspability`` then), ``poses`` (N, 3) the candidates' u, v and angle
+    and ``seed`` the draw of ``random``.
     """
     check_rule(rule)
     g = np.asarray(graspability, dtype=np.float64)
-    p = np.asarray(p_not_tangled, dtype=np.float64)
+    if p_not_tangled is None:
+        if needs_model(rule):
+            raise ValueError(f"the {rule} rule needs P(not tangled)")
+        p = np.zeros_like(g)
+    else:
+        p = np.asarray(p_not_tangled, dtype=np.float64)
     if g.ndim != 1 or g.shape != p.shape:
         raise ValueError(f"graspability {g.shape} and P(not tangled) {p.shape} must be two "
                          "equally long vectors")
     if not (np.isfinite(g).all() and np.isfinite(p).all()) or (g < 0).any():
         raise ValueError("graspability must be finite and non-negative, probabilities finite")
-    if len(g) == 0:
-        return Selection(None, g)
     if rule == "random":
-        if rng is None:
-            raise ValueError("the random rule needs a seeded rng")
-        return Selection(int(rng.integers(len(g))), np.full(len(g), 1 / len(g)))
+        if poses is None or len(poses) != len(g):
+            raise ValueError("the random rule needs the candidates' poses")
+        return _random(g, p, np.asarray(poses), seed)
     if rule == "graspability":
         scores, other = g, p
     elif rule == "cnn":
@@ -79,6 +119,32 @@ def select(rule: str, graspability: np.ndarray, p_not_tangled: np.ndarray,
         total = g_norm + p
         scores = np.divide(2 * g_norm * p, total, out=np.zeros_like(total), where=total > 0)
         other = g
+    return Ranking(_order(scores, other), scores)
+
+
+def _order(scores: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """Best first: by score, then the other term, then the earlier index."""
     # lexsort's last key is the primary one; the largest entry comes last.
-    order = np.lexsort((-np.arange(len(g)), other, scores))
-    return Selection(int(order[-1]), scores)
+    return np.lexsort((-np.arange(len(scores)), other, scores))[::-1].copy()
+
+
+def _random(g: np.ndarray, p: np.ndarray, poses: np.ndarray, seed: int) -> Ranking:
+    drawn = random_draw(poses, seed)
+    scores = np.zeros_like(g)
+    scores[:RANDOM_TOP_K] = 1.0 / max(min(len(g), RANDOM_TOP_K), 1)
+    rest = [int(i) for i in _order(g, p) if i != drawn]
+    order = np.array(([] if drawn is None else [drawn]) + rest, dtype=np.int64)
+    return Ranking(order, scores)
+
+
+def rank_candidates(rule: str, candidates: Sequence[Any],
+                    p_not_tangled: np.ndarray | None = None,
+                    seed: int = 0) -> list[ScoredCandidate]:
+    """``candidates`` (with ``score``, ``u``, ``v``, ``angle_deg``) as :func:`rank` orders
+    them, best first, each with its P(not tangled) and combined score."""
+    g = np.array([c.score for c in candidates], dtype=np.float64)
+    poses = np.array([(c.u, c.v, c.angle_deg) for c in candidates], dtype=np.float64)
+    ranking = rank(rule, g, p_not_tangled, poses.reshape(len(candidates), 3), seed)
+    return [ScoredCandidate(candidates[i],
+                            None if p_not_tangled is None else float(p_not_tangled[i]),
+                            float(ranking.scores[i])) for i in ranking.order]

@@ -7,18 +7,19 @@ port                      dir    value
 ``candidates``            in     list of grasp candidates (``u, v, angle_deg, width_m,
                                  depth_m, score, X_WT``; graspability's top-k)
 ``scored_candidates``     out    list of ``ScoredCandidate(candidate, p_not_tangled, score)``
-``selected_grasp``        out    the chosen candidate, or ``None`` when there is none
+                                 in the rule's order, best first (``selection.rank``)
+``selected_grasp``        out    the chosen candidate (the first), or ``None`` when there is
+                                 none
 ========================= ====== ==========================================================
 
 Both outputs come from one cache entry that depends on the two inputs only, so the CNN runs
 once per new image or candidate list however many ports are read. The ``random`` rule draws
-from a generator seeded by ``seed`` and the candidates' poses, which keeps the outputs a
-function of the inputs (as Drake requires) while differing between candidate lists.
+from ``seed`` and the candidates' poses, which keeps the outputs a function of the inputs (as
+Drake requires) while differing between candidate lists.
 """
 
 from __future__ import annotations
 
-import zlib
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -30,14 +31,7 @@ from pydrake.systems.sensors import ImageDepth32F
 
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.tangle_cnn.model import TangleModel, load_tangle_model
-from tangle_drake.tangle_cnn.selection import check_rule, select
-
-
-class ScoredCandidate(NamedTuple):
-    candidate: Any
-    p_not_tangled: float
-    score: float
-    """The selection rule's combined score."""
+from tangle_drake.tangle_cnn.selection import ScoredCandidate, check_rule, rank_candidates
 
 
 class _Result(NamedTuple):
@@ -76,10 +70,5 @@ class TangleCnnSystem(LeafSystem):
         candidates: Sequence[Any] = list(self.get_input_port(1).Eval(context))
         depth = np.asarray(self.get_input_port(0).Eval(context).data)[:, :, 0]
         p = self._model.predict_candidates(depth, self._intrinsics, candidates)
-        graspability = np.array([c.score for c in candidates], dtype=np.float64)
-        poses = np.array([(c.u, c.v, c.angle_deg) for c in candidates], dtype=np.float64)
-        rng = np.random.default_rng((self._seed, zlib.crc32(poses.tobytes())))
-        index, scores = select(self._rule, graspability, p, rng)
-        scored = [ScoredCandidate(c, float(pc), float(s))
-                  for c, pc, s in zip(candidates, p, scores, strict=True)]
-        value.set_value(_Result(scored, None if index is None else candidates[index]))
+        scored = rank_candidates(self._rule, candidates, p, self._seed)
+        value.set_value(_Result(scored, scored[0].candidate if scored else None))
