@@ -20,7 +20,12 @@ from pydrake.multibody.parsing import ModelDirective
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.sensors import CameraConfig
 
-from tangle_drake.drivers.config import DriverConfig, ParallelJawDriver, camera_channel
+from tangle_drake.drivers.config import (
+    DriverConfig,
+    ForceTorqueSensor,
+    ParallelJawDriver,
+    camera_channel,
+)
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.hardware.config import HardwareConfig, default_lcm_buses
 
@@ -115,6 +120,9 @@ class Scenario:
     """Model instance name -> its driver (``!NextageDriver``, ``!GantryDriver``,
     ``!ParallelJawDriver``; :mod:`tangle_drake.drivers.config`). Every model with actuators
     needs one; a picking station has one carrier and the gripper ``gripper``."""
+    force_torque_sensors: dict[str, ForceTorqueSensor] = field(default_factory=dict)
+    """Sensor name -> a 6-axis force/torque sensor in a weld (``wrist``: between the carrier
+    and the gripper), port ``{name}.force_torque``."""
     initial_positions: dict[str, float] = field(default_factory=dict)
     """Joint name -> initial position (rad or m); the robot's other joints start at
     ``robot.HOME``."""
@@ -163,6 +171,8 @@ class Scenario:
         links = [(f"model_drivers.{name}", config.lcm_bus,
                   [config.command_channel, config.status_channel])
                  for name, config in self.model_drivers.items()]
+        links += [(f"force_torque_sensors.{name}", sensor.lcm_bus, [sensor.channel])
+                  for name, sensor in self.force_torque_sensors.items()]
         links.append(("camera", self.camera.lcm_bus, [camera_channel(self.camera)]))
         channels: list[str] = []
         for where, bus, names in links:
@@ -173,6 +183,12 @@ class Scenario:
             channels += names
         repeated = sorted({c for c in channels if channels.count(c) > 1})
         _require(not repeated, "model_drivers", f"use channel {', '.join(repeated)} twice")
+        for name, sensor in self.force_torque_sensors.items():
+            where = f"force_torque_sensors.{name}"
+            _require(sensor.period > 0, f"{where}.period", "must be positive")
+            for value in ("force_noise", "torque_noise", "force_drift", "torque_drift",
+                          "force_resolution", "torque_resolution", "cutoff_frequency"):
+                _require(getattr(sensor, value) >= 0, f"{where}.{value}", "must be >= 0")
         for name, config in self.model_drivers.items():
             if isinstance(config, ParallelJawDriver):
                 _require(config.force_limit > 0, f"model_drivers.{name}.force_limit",

@@ -68,6 +68,43 @@ class ParallelJawDriver:
     """Grip force limit sent with every command, N."""
 
 
+@dataclass
+class ForceTorqueSensor:
+    """A 6-axis force/torque sensor in the weld above ``model::body`` (the wrist: between the
+    carrier's flange and the gripper): ``{name}.force_torque`` out, ``[fx, fy, fz, tx, ty, tz]``
+    in world coordinates, the force and torque (about the weld's origin) that the carrier
+    exerts on what hangs below it, so a held part of mass m adds ``m g`` to ``fz``. Over LCM:
+    ``lcmt_force_torque`` on ``channel``.
+
+    The defaults are those of a Robotiq FT 300-S class wrist sensor: 100 Hz, 0.1 N and
+    0.005 N·m noise, streamed in steps of 0.01 N and 0.001 N·m. Simulated, the plant's reaction
+    force at the weld is sampled every ``period``, low-pass filtered, and given
+    Gaussian noise and a random-walk bias, all from ``seed``.
+    """
+
+    model: str = "gripper"
+    body: str = "gripper_base"
+    lcm_bus: str = "default"
+    channel: str = "WRIST_FORCE_TORQUE"
+    period: float = 0.01
+    """Seconds between samples, s."""
+    force_noise: float = 0.1
+    """Standard deviation of each force sample's noise, N."""
+    torque_noise: float = 0.005
+    """...of each torque sample's, N·m."""
+    force_drift: float = 0.01
+    """Random-walk bias of the forces, N per square-root second (taring removes it)."""
+    torque_drift: float = 0.0005
+    """...of the torques, N·m per square-root second."""
+    force_resolution: float = 0.01
+    """Samples are rounded to this, N."""
+    torque_resolution: float = 0.001
+    """...and this, N·m."""
+    cutoff_frequency: float = 30.0
+    """Corner of the first-order low-pass filter on the samples, Hz (0: none)."""
+    seed: int = 0
+
+
 DriverConfig = NextageDriver | GantryDriver | ParallelJawDriver
 """Every driver kind a scenario may name (the tag is the class name)."""
 

@@ -12,8 +12,9 @@ from tangle_drake.scenario import Scenario
 
 
 def used_buses(scenario: Scenario) -> list[str]:
-    """The names of the buses the scenario's drivers and top camera use, each once."""
+    """The names of the buses the scenario's drivers, sensors and top camera use, each once."""
     names = [config.lcm_bus for config in scenario.model_drivers.values()]
+    names += [sensor.lcm_bus for sensor in scenario.force_torque_sensors.values()]
     names.append(scenario.camera.lcm_bus)
     return list(dict.fromkeys(names))
 

@@ -20,7 +20,7 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.lcm import LcmBuses
 
-from tangle_drake.drivers import camera
+from tangle_drake.drivers import camera, force_torque
 from tangle_drake.drivers.registry import driver_module
 from tangle_drake.hardware.buses import BusFinder
 from tangle_drake.pile import PileReport, PileSettler
@@ -55,6 +55,8 @@ def build_hardware_sim(scenario: Scenario, lcm_buses: LcmBuses | None = None,
     for name, config in scenario.model_drivers.items():
         driver_module(config).add_robot_side(builder, station, buses.find(config.lcm_bus), name,
                                              config, scenario, held[name])
+    for name, sensor in scenario.force_torque_sensors.items():
+        force_torque.add_robot_side(builder, station, buses.find(sensor.lcm_bus), name, sensor)
     camera.add_robot_side(builder, station, buses.find(scenario.camera.lcm_bus), scenario)
     diagram = builder.Build()
     diagram.set_name("hardware_sim")

@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from drake import (
+    lcmt_force_torque,
     lcmt_iiwa_command,
     lcmt_iiwa_status,
     lcmt_image,
@@ -122,6 +123,12 @@ def check_iiwa_command(num_joints: int) -> Check:
         return (_non_finite("joint_position", message.joint_position)
                 or _non_finite("joint_torque", message.joint_torque))
     return check
+
+
+def check_force_torque(message: lcmt_force_torque) -> str | None:
+    """Checks an ``lcmt_force_torque``: six finite values."""
+    return _non_finite("force/torque", [message.fx, message.fy, message.fz, message.tx,
+                                        message.ty, message.tz])
 
 
 def check_wsg_status(message: lcmt_schunk_wsg_status) -> str | None:

@@ -25,7 +25,7 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.lcm import LcmBuses, LcmSubscriberSystem
 
-from tangle_drake.drivers import camera, joint_position, parallel_jaw
+from tangle_drake.drivers import camera, force_torque, joint_position, parallel_jaw
 from tangle_drake.drivers.limits import station_limits
 from tangle_drake.drivers.registry import carrier, gripper
 from tangle_drake.errors import TangleDrakeError
@@ -118,6 +118,8 @@ def build_hardware_station(scenario: Scenario,
     parallel_jaw.add_command(builder, buses.find(hand_config.lcm_bus), hand_name, hand_config,
                              scenario.hardware, supervisor.GetOutputPort("gripper_command"),
                              send)
+    sensors = [force_torque.add_interface(builder, buses.find(sensor.lcm_bus), name, sensor)
+               for name, sensor in scenario.force_torque_sensors.items()]
     images = camera.add_interface(builder, buses.find(scenario.camera.lcm_bus), scenario)
     return HardwareStation(builder, scenario, buses.instances,
-                           [arm_status, hand_status, images])
+                           [arm_status, hand_status, *sensors, images])

@@ -19,7 +19,7 @@ from pydrake.systems.framework import Context, Diagram, DiagramBuilder
 from pydrake.systems.sensors import CameraConfig
 
 from tangle_drake.bin_model import bin_sdf
-from tangle_drake.drivers import camera
+from tangle_drake.drivers import camera, force_torque
 from tangle_drake.drivers.registry import driver_module
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import load_part
@@ -150,6 +150,8 @@ def build_simulated_station(scenario: Scenario,
     _set_initial_positions(plant, scenario)
     for name, config in scenario.model_drivers.items():
         driver_module(config).add_simulated(builder, plant, name, config, scenario)
+    for name, sensor in scenario.force_torque_sensors.items():
+        force_torque.add_simulated(builder, plant, name, sensor)
 
     camera.add_simulated(builder, scene_graph, scenario, SIM_ONLY_PREFIX)
     for config in scenario.view_cameras:

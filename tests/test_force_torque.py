@@ -1,0 +1,132 @@
+"""The wrist force/torque sensor: it weighs what hangs below it, with the noise it is given,
+replays the same samples from a restored context, and reaches the controller over LCM."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from drake import lcmt_force_torque
+from pydrake.math import RigidTransform
+from pydrake.systems.analysis import Simulator
+
+from tangle_drake.drivers.config import ForceTorqueSensor
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.hardware.loop import run_with_hardware_sim
+from tangle_drake.scenario import PartCount
+from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.station import build_station
+
+G = 9.81
+
+
+def small(name: str, parts: int = 1, **sensor):
+    scenario = resolve_scenario(name)
+    return replace(scenario, view_cameras=[],
+                   pile=replace(scenario.pile, parts=[PartCount("u_hook", parts)]),
+                   force_torque_sensors={"wrist": ForceTorqueSensor(**sensor)})
+
+
+def samples(station, simulator, start: float, count: int) -> np.ndarray:
+    context = simulator.get_mutable_context()
+    port = station.GetOutputPort("wrist.force_torque")
+    rows = []
+    for k in range(count):
+        simulator.AdvanceTo(start + 0.01 * (k + 1))
+        rows.append(port.Eval(context).copy())
+    return np.array(rows)
+
+
+def gripper_mass(station, context) -> float:
+    plant = station.plant
+    model = plant.GetModelInstanceByName("gripper")
+    return sum(plant.get_body(i).get_mass(station.plant_context(context))
+               for i in plant.GetBodyIndices(model))
+
+
+@pytest.mark.parametrize("name", ["floating_gripper.yaml", "pick_demo.yaml"])
+def test_the_sensor_weighs_the_gripper_with_its_noise(name):
+    station = build_station(small(name))
+    simulator = Simulator(station)
+    station.hold_still(simulator.get_mutable_context())
+    simulator.Initialize()
+    simulator.AdvanceTo(0.5)
+    wrench = samples(station, simulator, 0.5, 80)
+    weight = gripper_mass(station, simulator.get_context()) * G
+    assert wrench[:, 2].mean() == pytest.approx(weight, abs=0.05)  # the support force, +z
+    assert np.abs(wrench[:, :2].mean(axis=0)).max() < 0.06
+    assert wrench[:, :3].std(axis=0) == pytest.approx([0.1] * 3, rel=0.3)
+    assert wrench[:, 3:].std(axis=0) == pytest.approx([0.005] * 3, rel=0.35)
+    # Samples come in the stream's steps of 0.01 N.
+    assert np.allclose(wrench[:, :3] * 100, np.round(wrench[:, :3] * 100), atol=1e-6)
+
+
+def test_a_part_in_the_fingers_adds_its_weight_and_a_restored_context_replays_the_samples():
+    scenario = small("floating_gripper.yaml", force_noise=0.0, torque_noise=0.0,
+                     force_drift=0.0, torque_drift=0.0)
+    station = build_station(scenario)
+    plant = station.plant
+    simulator = Simulator(station)
+    context = simulator.get_mutable_context()
+    station.hold_still(context)
+    simulator.Initialize()
+    start = context.Clone()
+    simulator.AdvanceTo(0.3)
+    empty = samples(station, simulator, 0.3, 20)[:, 2].mean()
+    # Put the part between the open fingers of the parked gripper, then close them on it.
+    simulator.get_mutable_context().SetTimeStateAndParametersFrom(start)
+    gripper = plant.GetBodyByName("gripper_base")
+    X_WG = gripper.EvalPoseInWorld(station.plant_context(context))
+    tcp = plant.GetFrameByName("gripper_tcp").CalcPoseInWorld(station.plant_context(context))
+    part = station.pile_bodies[0]
+    station.GetInputPort("gripper.position").FixValue(context, [0.04])
+    simulator.Initialize()
+    simulator.AdvanceTo(0.3)
+    plant.SetFreeBodyPose(station.mutable_plant_context(context), part,
+                          RigidTransform(X_WG.rotation(), tcp.translation()))
+    station.GetInputPort("gripper.position").FixValue(context, [0.0])
+    simulator.AdvanceTo(1.0)
+    held = samples(station, simulator, 1.0, 30)[:, 2].mean()
+    mass = part.get_mass(station.plant_context(context))
+    assert held - empty == pytest.approx(mass * G, abs=0.03)
+
+    # The same start and the same inputs give the same samples, noise included.
+    noisy = build_station(small("floating_gripper.yaml"))
+    runs = []
+    for _ in range(2):
+        sim = Simulator(noisy)
+        noisy.hold_still(sim.get_mutable_context())
+        sim.Initialize()
+        runs.append(samples(noisy, sim, 0.0, 10))
+    assert np.array_equal(runs[0], runs[1])
+    other = build_station(small("floating_gripper.yaml", seed=1))
+    sim = Simulator(other)
+    other.hold_still(sim.get_mutable_context())
+    sim.Initialize()
+    assert not np.array_equal(runs[0], samples(other, sim, 0.0, 10))
+
+
+def test_a_sensor_needs_a_body_hanging_from_a_weld():
+    with pytest.raises(TangleDrakeError, match="no_such_body is in no model"):
+        build_station(small("floating_gripper.yaml", body="no_such_body"))
+    with pytest.raises(TangleDrakeError, match="hangs from no weld"):
+        build_station(small("floating_gripper.yaml", body="left_finger"))
+
+
+def test_the_controller_reads_the_sensor_over_lcm_and_refuses_a_malformed_message():
+    scenario = small("floating_gripper.yaml")
+    scenario.camera.width, scenario.camera.height = 64, 48
+    loop = run_with_hardware_sim(scenario, lambda station: station, 0.3)
+    context = loop.station.GetMyContextFromRoot(loop.controller.get_context())
+    received = loop.station.GetOutputPort("wrist.force_torque").Eval(context).copy()
+    truth_context = loop.robot.station.GetMyContextFromRoot(loop.robot.simulator.get_context())
+    truth = loop.robot.station.GetOutputPort("wrist.force_torque").Eval(truth_context)
+    assert received[2] == pytest.approx(truth[2], abs=0.35)  # a sample or so apart
+    assert received[2] == pytest.approx(4.22, abs=0.3)
+    bad = lcmt_force_torque()
+    bad.fz = float("nan")
+    loop.lcm.Publish("WRIST_FORCE_TORQUE", bad.encode())
+    loop.advance(0.005, robot=False)
+    subscriber = loop.station.GetSubsystemByName("wrist.subscriber")
+    record = subscriber.get_output_port().Eval(subscriber.GetMyContextFromRoot(
+        loop.controller.get_context()))
+    assert record.rejected == 1 and "non-finite" in record.last_error
