@@ -1,0 +1,180 @@
+"""Weighing what came up: the payload estimator, from the wrist force/torque sensor alone.
+
+The pick planner says when (``phase``): ``TARE`` with the open gripper at the pre-grasp, and
+``WEIGH`` at the top of the lift. The estimator takes samples only while the carrier is
+stopped, and only once it has been stopped for ``settle_time`` (a load swings on after the arm
+stops); any motion starts the window again, so nothing is weighed while the arm accelerates.
+The estimate is the mean vertical support force over the window minus the tare, in part
+weights. It reads no ``sim.`` port: on hardware it is the same system.
+
+Confidence: the estimate's distance to the nearest whole number of parts and its standard
+error, and a load that swings (samples spread far beyond the sensor's noise) is flagged.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import Context, LeafSystem, State
+
+G = 9.81
+"""Standard gravity, m/s² (the plant's)."""
+_FZ = 2
+"""Index of the vertical force in ``[fx, fy, fz, tx, ty, tz]``."""
+
+
+class PayloadPhase(enum.Enum):
+    """What the planner asks of the estimator."""
+
+    IDLE = "idle"
+    TARE = "tare"
+    """The gripper holds nothing: measure what the sensor reads then."""
+    WEIGH = "weigh"
+    """The gripper holds what came up: weigh it."""
+
+
+@dataclass(frozen=True)
+class PayloadSettings:
+    """How the estimator weighs (SI units)."""
+
+    part_mass: float
+    """One part's mass, kg (the scenario's part, or the weighed one)."""
+    sensor_noise: float = 0.1
+    """Standard deviation of one force sample, N (the sensor's)."""
+    settle_time: float = 0.1
+    """The carrier must have been stopped this long before samples count, s."""
+    window: float = 0.2
+    """Seconds of samples in a weighing (and at least this much for a tare)."""
+    period: float = 0.01
+    """Seconds between looks at the sensor (its sample period)."""
+    stopped_speed: float = 0.005
+    """The carrier counts as stopped while every joint moves slower than this (rad/s, m/s)."""
+    swing_factor: float = 3.0
+    """A load whose samples spread more than this many times the sensor's noise swings."""
+    max_fraction: float = 0.25
+    """An estimate farther than this from a whole number of parts is not trusted."""
+
+    def __post_init__(self) -> None:
+        for name in ("part_mass", "sensor_noise", "settle_time", "window", "period",
+                     "stopped_speed", "swing_factor"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"PayloadSettings.{name} must be positive")
+        if not 0 < self.max_fraction <= 0.5:
+            raise ValueError("PayloadSettings.max_fraction must be in (0, 0.5]")
+
+
+@dataclass(frozen=True)
+class PayloadEstimate:
+    """The last weighing."""
+
+    ready: bool = False
+    """A weighing has finished since the last ``WEIGH`` began."""
+    parts: float = math.nan
+    """What the load weighs, in parts (a real number)."""
+    count: int | None = None
+    """``parts`` rounded; ``None`` before a weighing."""
+    std: float = math.nan
+    """Standard error of ``parts``."""
+    confidence: float = 0.0
+    """The chance that ``count`` is right, from the estimate's distance to it and its
+    standard error: near 1 on a whole number, 0.5 half-way between two."""
+    swinging: bool = False
+    """The samples spread far beyond the sensor's noise: the load was still moving."""
+    trusted: bool = False
+    """Near a whole number, not swinging: the count may be acted on."""
+    samples: int = 0
+
+
+@dataclass(frozen=True)
+class _State:
+    phase: PayloadPhase = PayloadPhase.IDLE
+    stopped_since: float | None = None
+    tare: float | None = None
+    window: tuple[float, ...] = ()
+    estimate: PayloadEstimate = field(default_factory=PayloadEstimate)
+
+
+def estimate_from(samples: np.ndarray, tare: float, settings: PayloadSettings,
+                  ) -> PayloadEstimate:
+    """The estimate of a window of vertical support forces (N), tared."""
+    weight = settings.part_mass * G
+    parts = (float(np.mean(samples)) - tare) / weight
+    spread = float(np.std(samples))
+    std = max(spread, settings.sensor_noise) / math.sqrt(len(samples)) / weight
+    count = max(round(parts), 0)
+    fraction = abs(parts - count)
+    # The chance that the true load rounds to ``count``, the estimate being Gaussian.
+    confidence = 0.5 * (math.erf((0.5 - fraction) / (std * math.sqrt(2)))
+                        + math.erf((0.5 + fraction) / (std * math.sqrt(2))))
+    swinging = spread > settings.swing_factor * settings.sensor_noise
+    return PayloadEstimate(True, parts, count, std, confidence, swinging,
+                           fraction <= settings.max_fraction and not swinging, len(samples))
+
+
+class PayloadEstimator(LeafSystem):
+    """Counts the parts the gripper holds from the wrist sensor (see the module docstring).
+
+    Inputs: ``force_torque`` (the station's ``wrist.force_torque``), ``carrier_state`` (the
+    carrier's ``state_measured``: positions then velocities), ``phase`` (a
+    :class:`PayloadPhase`). Output ``payload`` (a :class:`PayloadEstimate`).
+    """
+
+    def __init__(self, settings: PayloadSettings, carrier_state_size: int) -> None:
+        super().__init__()
+        self._settings = settings
+        self._samples = max(1, round(settings.window / settings.period))
+        self._force = self.DeclareVectorInputPort("force_torque", 6)
+        self._carrier = self.DeclareVectorInputPort("carrier_state", carrier_state_size)
+        self._phase = self.DeclareAbstractInputPort("phase",
+                                                    AbstractValue.Make(PayloadPhase.IDLE))
+        self._state = self.DeclareAbstractState(AbstractValue.Make(_State()))
+        self.DeclarePeriodicUnrestrictedUpdateEvent(settings.period, 0.0, self._update)
+        self.DeclareAbstractOutputPort(
+            "payload", lambda: AbstractValue.Make(PayloadEstimate()),
+            lambda context, value: value.set_value(self._get(context).estimate),
+            {self.abstract_state_ticket(self._state)})
+
+    @property
+    def settings(self) -> PayloadSettings:
+        return self._settings
+
+    def _get(self, context: Context) -> _State:
+        return context.get_abstract_state(self._state).get_value()
+
+    def _update(self, context: Context, state: State) -> None:
+        old = self._get(context)
+        new = self._next(context, old)
+        if new != old:
+            state.get_mutable_abstract_state(self._state).set_value(new)
+
+    def _next(self, context: Context, s: _State) -> _State:
+        t = context.get_time()
+        phase = self._phase.Eval(context) if self._phase.HasValue(context) else PayloadPhase.IDLE
+        if phase is not s.phase:  # a new tare or weighing starts from nothing
+            s = replace(s, phase=phase, window=())
+            if phase is PayloadPhase.TARE:
+                s = replace(s, tare=None)
+            if phase is PayloadPhase.WEIGH:
+                s = replace(s, estimate=PayloadEstimate())
+        if phase is PayloadPhase.IDLE:
+            return s
+        state = self._carrier.Eval(context)
+        speed = float(np.max(np.abs(state[len(state) // 2:]), initial=0.0))
+        if speed > self._settings.stopped_speed:
+            return replace(s, stopped_since=None, window=())
+        since = t if s.stopped_since is None else s.stopped_since
+        s = replace(s, stopped_since=since)
+        if t - since < self._settings.settle_time - 1e-9:
+            return s
+        fz = float(self._force.Eval(context)[_FZ])
+        window = (*s.window, fz)[-self._samples:]
+        s = replace(s, window=window)
+        if phase is PayloadPhase.TARE:
+            return replace(s, tare=float(np.mean(window)))
+        if len(window) >= self._samples and s.tare is not None and not s.estimate.ready:
+            return replace(s, estimate=estimate_from(np.array(window), s.tare, self._settings))
+        return s

@@ -1,0 +1,106 @@
+"""The payload estimator: counts parts from the wrist sensor's vertical force, only while the
+carrier is stopped, with a confidence, and flags a swinging load."""
+
+import math
+
+import numpy as np
+import pytest
+from pydrake.common.value import AbstractValue
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder, LeafSystem
+
+from tangle_drake.pick.payload import (
+    G,
+    PayloadEstimator,
+    PayloadPhase,
+    PayloadSettings,
+    estimate_from,
+)
+
+PART = 0.0328  # kg, a U-hook
+SETTINGS = PayloadSettings(part_mass=PART)
+GRIPPER = 4.22  # N
+
+
+class Scripted(LeafSystem):
+    """A wrist sensor, a carrier's state and the planner's phase, as functions of time."""
+
+    def __init__(self, force, speed, phase) -> None:
+        super().__init__()
+        self.DeclareVectorOutputPort("force_torque", 6, lambda c, out: out.SetFromVector(
+            [0, 0, force(c.get_time()), 0, 0, 0]), {self.time_ticket()})
+        self.DeclareVectorOutputPort("carrier_state", 8, lambda c, out: out.SetFromVector(
+            [0, 0, 0, 0, speed(c.get_time()), 0, 0, 0]), {self.time_ticket()})
+        self.DeclareAbstractOutputPort("phase", lambda: AbstractValue.Make(PayloadPhase.IDLE),
+                                       lambda c, v: v.set_value(phase(c.get_time())),
+                                       {self.time_ticket()})
+
+
+def run(force, speed=lambda t: 0.0, phase=None, until=2.0):
+    """The estimate at ``until``; tare over [0, 0.5), weigh from 0.5 s on by default."""
+    phase = phase or (lambda t: PayloadPhase.TARE if t < 0.5 else PayloadPhase.WEIGH)
+    builder = DiagramBuilder()
+    source = builder.AddSystem(Scripted(force, speed, phase))
+    estimator = builder.AddSystem(PayloadEstimator(SETTINGS, 8))
+    for port in ("force_torque", "carrier_state", "phase"):
+        builder.Connect(source.GetOutputPort(port), estimator.GetInputPort(port))
+    simulator = Simulator(builder.Build())
+    simulator.AdvanceTo(until)
+    context = estimator.GetMyContextFromRoot(simulator.get_context())
+    return estimator.GetOutputPort("payload").Eval(context)
+
+
+@pytest.mark.parametrize("parts", [0, 1, 2, 3])
+def test_counts_the_parts_hanging_below_the_sensor(parts):
+    rng = np.random.default_rng(parts)
+    noise = 0.1 * rng.standard_normal(400)
+
+    def force(t: float) -> float:
+        load = GRIPPER + (parts * PART * G if t >= 0.5 else 0.0)
+        return load + noise[round(t * 100) % 400]
+
+    estimate = run(force)
+    assert estimate.ready and estimate.count == parts and estimate.trusted
+    assert estimate.parts == pytest.approx(parts, abs=0.25)
+    assert estimate.samples == 20 and 0.0 < estimate.std < 0.1
+
+
+def test_no_estimate_while_the_carrier_moves_and_the_window_starts_again_when_it_stops():
+    def force(t):
+        return GRIPPER + (PART * G if t >= 0.5 else 0.0)
+
+    def speed(t):
+        return 0.2 if 0.5 <= t < 1.5 else 0.0  # still rising after the weighing was asked for
+
+    assert not run(force, speed, until=1.5).ready
+    assert not run(force, speed, until=1.65).ready  # 0.1 s settling + 0.2 s window not yet
+    late = run(force, speed, until=1.95)
+    assert late.ready and late.count == 1 and late.samples == 20
+
+
+def test_a_swinging_load_is_flagged_and_not_trusted():
+    def force(t):
+        swing = 0.8 * math.sin(2 * math.pi * 3.0 * t) if t >= 0.5 else 0.0
+        return GRIPPER + (PART * G if t >= 0.5 else 0.0) + swing
+
+    estimate = run(force)
+    assert estimate.ready and estimate.swinging and not estimate.trusted
+
+
+def test_half_way_between_two_counts_is_low_confidence():
+    estimate = estimate_from(np.full(20, 1.5 * PART * G), 0.0, SETTINGS)
+    assert estimate.confidence == pytest.approx(0.5, abs=0.01) and not estimate.trusted
+    sure = estimate_from(np.full(20, 2.0 * PART * G), 0.0, SETTINGS)
+    assert sure.count == 2 and sure.confidence > 0.99 and sure.trusted
+
+
+def test_nothing_is_weighed_before_a_tare():
+    estimate = run(lambda t: GRIPPER, phase=lambda t: PayloadPhase.WEIGH)
+    assert not estimate.ready
+
+
+def test_settings_refuse_nonsense():
+    with pytest.raises(ValueError, match="part_mass"):
+        PayloadSettings(part_mass=0.0)
+    with pytest.raises(ValueError, match="max_fraction"):
+        PayloadSettings(part_mass=0.03, max_fraction=0.7)
