@@ -1,4 +1,5 @@
-"""The bin the parts lie in: a floor and four walls on a stand, generated from ``BinConfig``."""
+"""The bin the parts lie in (and the output tray they go to): a floor and four walls on a
+stand, generated from a ``BinConfig``."""
 
 from __future__ import annotations
 
@@ -27,14 +28,18 @@ def bin_boxes(config: BinConfig) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     }
 
 
-def bin_sdf(config: BinConfig) -> str:
-    """SDFormat text of the bin as one static model named ``bin`` (welded to the world)."""
+def bin_sdf(config: BinConfig, name: str = "bin", stand: bool = True) -> str:
+    """SDFormat text of the box as one static model named ``name`` (welded to the world);
+    ``stand=False`` leaves out the stand under it (the tray: a stand beside the bin would show
+    in the top camera's view, which widens below the bin's floor)."""
     links = []
-    for name, (center, size) in bin_boxes(config).items():
-        colour = "0.35 0.37 0.4 1" if name != "stand" else "0.55 0.5 0.45 1"
+    for box_name, (center, size) in bin_boxes(config).items():
+        if box_name == "stand" and not stand:
+            continue
+        colour = "0.35 0.37 0.4 1" if box_name != "stand" else "0.55 0.5 0.45 1"
         box = f"<box><size>{size[0]:.6f} {size[1]:.6f} {size[2]:.6f}</size></box>"
         links.append(f"""
-    <link name="{name}">
+    <link name="{box_name}">
       <pose>{center[0]:.6f} {center[1]:.6f} {center[2]:.6f} 0 0 0</pose>
       <visual name="visual"><geometry>{box}</geometry>
         <material><diffuse>{colour}</diffuse></material></visual>
@@ -46,11 +51,21 @@ def bin_sdf(config: BinConfig) -> str:
     </link>""")
     return f"""<?xml version="1.0"?>
 <sdf version="1.9" xmlns:drake="http://drake.mit.edu">
-  <model name="bin">
+  <model name="{name}">
     <static>true</static>{"".join(links)}
   </model>
 </sdf>
 """
+
+
+RELEASE_ABOVE_RIM = 0.15
+"""The tool centre releases a part this far above the tray's rim, m: the part, hanging up to
+a few centimetres below it, drops in clear of the walls."""
+
+
+def release_point(tray: BinConfig) -> np.ndarray:
+    """Where the tool centre releases a part over ``tray``: above its floor's centre, m."""
+    return np.array([*tray.center, tray.floor_height + tray.wall_height + RELEASE_ABOVE_RIM])
 
 
 def inside_bin(config: BinConfig, p_W: np.ndarray, margin: float = 0.0) -> np.ndarray:

@@ -28,6 +28,8 @@ class FailureKind(enum.Enum):
     """The hardware station's safety supervisor stopped the robot during the pick."""
     TIMEOUT = "timeout"
     """The pick did not finish in the simulated time allowed."""
+    GAVE_UP = "gave up"
+    """Closed loop: too many grasps in a row delivered nothing; the planner stopped."""
 
 
 _BLAME_ORDER = (FailureKind.UNREACHABLE, FailureKind.COLLISION, FailureKind.REPEAT,

@@ -127,6 +127,9 @@ class Scenario:
     """Joint name -> initial position (rad or m); the robot's other joints start at
     ``robot.HOME``."""
     bin: BinConfig = field(default_factory=BinConfig)
+    tray: BinConfig | None = None
+    """The output tray beside the bin that picked parts are released into (a box like the
+    bin); ``None``: parts are released beside the bin, onto the floor."""
     pile: PileConfig = field(default_factory=PileConfig)
     camera: CameraConfig = field(default_factory=_default_camera)
     camera_height: float | None = 0.5
@@ -150,6 +153,10 @@ class Scenario:
                  "plant_config.discrete_contact_approximation",
                  "must be sap, lagged or similar (TAMSI diverges on piles)")
         self.bin.validate("bin")
+        if self.tray is not None:
+            self.tray.validate("tray")
+            _require(not _footprints_overlap(self.bin, self.tray), "tray",
+                     "must stand beside the bin, not over it")
         self.pile.validate("pile")
         _require(self.camera.depth, "camera.depth", "must be true: graspability needs depth")
         _require(self.camera_height is None or self.camera_height > self.bin.wall_height,
@@ -230,6 +237,16 @@ def _represent_tagged(dumper: yaml.SafeDumper, data: _Tagged) -> yaml.Node:
 
 _TaggedLoader.add_multi_constructor("!", _construct_tagged)
 _TaggedDumper.add_representer(_Tagged, _represent_tagged)
+
+
+def _footprints_overlap(a: BinConfig, b: BinConfig) -> bool:
+    """Whether two boxes' outer footprints overlap (walls included)."""
+    for axis in range(2):
+        half_a = a.inner_size[axis] / 2 + a.wall_thickness
+        half_b = b.inner_size[axis] / 2 + b.wall_thickness
+        if abs(a.center[axis] - b.center[axis]) >= half_a + half_b:
+            return False
+    return True
 
 
 def _require(condition: bool, field_path: str, message: str) -> None:

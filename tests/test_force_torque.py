@@ -10,6 +10,7 @@ from pydrake.math import RigidTransform
 from pydrake.systems.analysis import Simulator
 
 from tangle_drake.drivers.config import ForceTorqueSensor
+from tangle_drake.drivers.force_torque import sample_draws
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.hardware.loop import run_with_hardware_sim
 from tangle_drake.scenario import PartCount
@@ -56,6 +57,10 @@ def test_the_sensor_weighs_the_gripper_with_its_noise(name):
     assert np.abs(wrench[:, :2].mean(axis=0)).max() < 0.06
     assert wrench[:, :3].std(axis=0) == pytest.approx([0.1] * 3, rel=0.3)
     assert wrench[:, 3:].std(axis=0) == pytest.approx([0.005] * 3, rel=0.35)
+    # Independent from sample to sample, so a mean over a window is as good as it should be.
+    noise = wrench[:, 2] - wrench[:, 2].mean()
+    assert abs(np.corrcoef(noise[:-1], noise[1:])[0, 1]) < 0.3
+    assert abs(wrench[:20, 2].mean() - weight) < 4 * 0.1 / np.sqrt(20)
     # Samples come in the stream's steps of 0.01 N.
     assert np.allclose(wrench[:, :3] * 100, np.round(wrench[:, :3] * 100), atol=1e-6)
 
@@ -103,6 +108,14 @@ def test_a_part_in_the_fingers_adds_its_weight_and_a_restored_context_replays_th
     other.hold_still(sim.get_mutable_context())
     sim.Initialize()
     assert not np.array_equal(runs[0], samples(other, sim, 0.0, 10))
+
+
+def test_each_sample_draws_its_own_noise():
+    draws = [np.concatenate(sample_draws(0, k)) for k in range(500)]
+    now, then = np.array(draws[1:]), np.array(draws[:-1])
+    correlation = np.corrcoef(np.hstack([then, now]).T)[:12, 12:]
+    assert np.abs(correlation).max() < 0.2
+    assert not np.array_equal(sample_draws(3, 7)[0], sample_draws(4, 7)[0])
 
 
 def test_a_sensor_needs_a_body_hanging_from_a_weld():

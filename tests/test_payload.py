@@ -13,6 +13,7 @@ from tangle_drake.pick.payload import (
     G,
     PayloadEstimator,
     PayloadPhase,
+    PayloadRequest,
     PayloadSettings,
     estimate_from,
 )
@@ -31,9 +32,11 @@ class Scripted(LeafSystem):
             [0, 0, force(c.get_time()), 0, 0, 0]), {self.time_ticket()})
         self.DeclareVectorOutputPort("carrier_state", 8, lambda c, out: out.SetFromVector(
             [0, 0, 0, 0, speed(c.get_time()), 0, 0, 0]), {self.time_ticket()})
-        self.DeclareAbstractOutputPort("phase", lambda: AbstractValue.Make(PayloadPhase.IDLE),
-                                       lambda c, v: v.set_value(phase(c.get_time())),
-                                       {self.time_ticket()})
+        self.DeclareAbstractOutputPort(
+            "request", lambda: AbstractValue.Make(PayloadRequest()),
+            lambda c, v: v.set_value(PayloadRequest(
+                phase(c.get_time()), int(phase(c.get_time()) is PayloadPhase.WEIGH))),
+            {self.time_ticket()})
 
 
 def run(force, speed=lambda t: 0.0, phase=None, until=2.0):
@@ -42,7 +45,7 @@ def run(force, speed=lambda t: 0.0, phase=None, until=2.0):
     builder = DiagramBuilder()
     source = builder.AddSystem(Scripted(force, speed, phase))
     estimator = builder.AddSystem(PayloadEstimator(SETTINGS, 8))
-    for port in ("force_torque", "carrier_state", "phase"):
+    for port in ("force_torque", "carrier_state", "request"):
         builder.Connect(source.GetOutputPort(port), estimator.GetInputPort(port))
     simulator = Simulator(builder.Build())
     simulator.AdvanceTo(until)

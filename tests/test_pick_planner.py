@@ -48,6 +48,7 @@ class FakeMotion:
         self.unreachable = unreachable
         self.colliding = colliding
         self.planned: list[int] = []
+        self.shakes = self.lowered = 0
 
     def hold_command(self, measured: np.ndarray) -> np.ndarray:
         return np.asarray(measured[:2]).copy()
@@ -62,7 +63,18 @@ class FakeMotion:
         home, there = np.zeros(2), np.array([0.3, -0.2])
         go, back = (rest_to_rest(home, there, 1.0, 1.5),
                     rest_to_rest(there, home, 1.0, 1.5))
-        return PickMotion(go, back, go, back, rest_to_rest(home, home, 1.0, 1.5), X_WT)
+        return PickMotion(go, back, go, back, rest_to_rest(home, home, 1.0, 1.5), back, X_WT)
+
+    def plan_shake(self, hold):
+        self.shakes += 1
+        return rest_to_rest(hold, np.asarray(hold) + 0.01, 1.0, 1.5)
+
+    def plan_lower(self, hold, X_WT, clearance):
+        self.lowered += 1
+        return rest_to_rest(hold, np.asarray(hold) - 0.1, 0.1, 1.5)  # ~1.1 s
+
+    def plan_line(self, start, end):
+        return rest_to_rest(start, end, 1.0, 1.5)
 
 
 class CountingCandidates(LeafSystem):

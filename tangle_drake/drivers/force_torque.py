@@ -40,6 +40,14 @@ WRENCH_SIZE = 6
 """``[fx, fy, fz, tx, ty, tz]``: N and N·m."""
 
 
+def sample_draws(seed: int, index: int) -> tuple[np.ndarray, np.ndarray]:
+    """The standard-normal noise and bias-walk steps of sample ``index``: a function of the
+    seed and the index alone. One Philox key per sample; a shared key with the index as the
+    counter would hand a sample's draws on to its neighbour (correlation 0.97)."""
+    draw = np.random.Generator(np.random.Philox(key=[index, seed]))
+    return draw.standard_normal(WRENCH_SIZE), draw.standard_normal(WRENCH_SIZE)
+
+
 def weld_above(plant: MultibodyPlant, config: ForceTorqueSensor) -> Joint:
     """The weld joint whose child is the sensed body (where the sensor sits)."""
     if not plant.HasModelInstanceNamed(config.model) or not plant.HasBodyNamed(
@@ -95,9 +103,7 @@ class SimulatedForceTorque(LeafSystem):
         filtered, bias, sample = x[:6], x[6:12], x[12:18]
         wrench = self.true_wrench(context)
         filtered = wrench if x[18] == 0 else filtered + self._alpha * (wrench - filtered)
-        index = round(context.get_time() / self._period)
-        draw = np.random.Generator(np.random.Philox(key=self._config.seed, counter=index))
-        noise, walk = draw.standard_normal(WRENCH_SIZE), draw.standard_normal(WRENCH_SIZE)
+        noise, walk = sample_draws(self._config.seed, round(context.get_time() / self._period))
         bias = bias + self._drift * walk
         sample = filtered + bias + self._noise * noise
         steps = self._resolution > 0

@@ -26,13 +26,19 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import FINGER_GRIP_SPAN_M, GraspabilityParams, bin_roi
 from tangle_drake.graspability.system import GraspabilitySystem
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.parts import load_part
 from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_spec
-from tangle_drake.pick.outcome import LiftMonitor
+from tangle_drake.pick.outcome import LiftMonitor, TrayMonitor
+from tangle_drake.pick.payload import PayloadEstimator, PayloadSettings
 from tangle_drake.pick.planner import PickPlanner, PickSettings
+from tangle_drake.pick.recovery import RecoverySettings
 from tangle_drake.pick.selection import RuleSelector, TangleChoice
 from tangle_drake.planning.motion import Motion
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
 from tangle_drake.station import SimulatedStation, build_station, camera_model
+
+WRIST = "wrist"
+"""The force/torque sensor the closed loop weighs with (``force_torque_sensors.wrist``)."""
 
 SelectionWiring = Callable[[DiagramBuilder, OutputPort, OutputPort],
                            tuple[OutputPort, OutputPort]]
@@ -50,6 +56,10 @@ class PickDiagram:
     planner: PickPlanner
     monitor: LiftMonitor | None
     """``None`` on a station that is not simulated."""
+    tray: TrayMonitor | None = None
+    """Simulation only, with a tray in the scenario: what lies in it."""
+    payload: PayloadEstimator | None = None
+    """Closed loop: the estimator that weighs each lift."""
 
 
 def palm_margin_px(camera: CameraModel, bin_config: BinConfig,
@@ -80,6 +90,24 @@ def pick_settings(scenario: Scenario, **overrides) -> PickSettings:
     wire (:func:`~tangle_drake.drivers.parallel_jaw.empty_grasp_width`), then ``overrides``."""
     return PickSettings(**{"empty_width": empty_grasp_width(thinnest_wire(scenario.pile)),
                            **overrides})
+
+
+def closed_loop_settings(scenario: Scenario, **overrides) -> PickSettings:
+    """:func:`pick_settings` for the closed loop: weigh every lift (the scenario needs a
+    ``wrist`` force/torque sensor and a tray)."""
+    missing = [what for what, ok in (("a 'wrist' force/torque sensor",
+                                      WRIST in scenario.force_torque_sensors),
+                                     ("a 'tray'", scenario.tray is not None)) if not ok]
+    if missing:
+        raise TangleDrakeError(f"closed-loop picking needs {' and '.join(missing)} in the "
+                               "scenario (as pick_demo.yaml has); pick open loop without")
+    return pick_settings(scenario, **{"recovery": RecoverySettings(), **overrides})
+
+
+def part_mass(pile: PileConfig) -> float:
+    """One part's mass for weighing, kg: the lightest of the pile's parts (a pile of one
+    part type weighs in whole parts)."""
+    return min(load_part(e.part, mesh_scale=e.mesh_scale).mass for e in pile.parts)
 
 
 def default_graspability_params(scenario: Scenario) -> GraspabilityParams:
@@ -133,7 +161,8 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
     builder.AddSystem(station)
     graspability = builder.AddNamedSystem(
         "graspability", GraspabilitySystem(camera, DEFAULT_GRIPPER, params, roi))
-    planner = builder.AddNamedSystem("pick_planner", PickPlanner(motion, settings))
+    planner_settings = settings or PickSettings()
+    planner = builder.AddNamedSystem("pick_planner", PickPlanner(motion, planner_settings))
     depth = station.GetOutputPort("camera.depth_image")
     builder.Connect(depth, graspability.GetInputPort("depth_image"))
     builder.Connect(graspability.GetOutputPort("candidates"), planner.GetInputPort("candidates"))
@@ -166,15 +195,41 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
         builder.Connect(station.GetOutputPort("safety.fault"),
                         planner.GetInputPort("safety.fault"))
     monitor = None
+    payload = None
+    if planner_settings.recovery is not None:
+        payload = _add_payload(builder, scenario, station, planner, motion)
+    monitor = tray = None
     if isinstance(station, SimulatedStation):
+        poses = station.GetOutputPort("sim.body_poses")
         monitor = builder.AddNamedSystem("lift_monitor (sim only)",
                                          LiftMonitor(station.plant, scenario.bin))
-        builder.Connect(station.GetOutputPort("sim.body_poses"),
-                        monitor.GetInputPort("body_poses"))
+        builder.Connect(poses, monitor.GetInputPort("body_poses"))
         builder.Connect(monitor.GetOutputPort("lifted_count"),
                         planner.GetInputPort("lifted_count"))
+        if scenario.tray is not None:
+            tray = builder.AddNamedSystem("tray_monitor (sim only)",
+                                          TrayMonitor(station.plant, scenario.tray))
+            builder.Connect(poses, tray.GetInputPort("body_poses"))
     builder.ExportOutput(planner.GetOutputPort("mode"), "mode")
     builder.ExportOutput(planner.GetOutputPort("picks"), "picks")
     diagram = builder.Build()
     diagram.set_name("pick_demo")
-    return PickDiagram(diagram, station, planner, monitor)
+    return PickDiagram(diagram, station, planner, monitor, tray, payload)
+
+
+def _add_payload(builder: DiagramBuilder, scenario: Scenario, station: Diagram,
+                 planner: PickPlanner, motion: Motion) -> PayloadEstimator:
+    """The estimator between the wrist sensor, the carrier's state and the planner."""
+    sensor = scenario.force_torque_sensors[WRIST]
+    estimator = builder.AddNamedSystem("payload", PayloadEstimator(
+        PayloadSettings(part_mass=part_mass(scenario.pile), sensor_noise=max(
+            sensor.force_noise, sensor.force_resolution), period=sensor.period),
+        motion.measured_size))
+    wrench = station.GetOutputPort(f"{WRIST}.force_torque")
+    builder.Connect(wrench, estimator.GetInputPort("force_torque"))
+    builder.Connect(wrench, planner.GetInputPort("wrist.force_torque"))
+    builder.Connect(station.GetOutputPort(motion.measured_port),
+                    estimator.GetInputPort("carrier_state"))
+    builder.Connect(planner.GetOutputPort("payload.request"), estimator.GetInputPort("request"))
+    builder.Connect(estimator.GetOutputPort("payload"), planner.GetInputPort("payload"))
+    return estimator

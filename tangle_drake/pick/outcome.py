@@ -19,7 +19,10 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import BasicVector, Context, LeafSystem
 
+from tangle_drake.bin_model import inside_bin
 from tangle_drake.failures import FailureKind
+from tangle_drake.pick.payload import PayloadEstimate
+from tangle_drake.pick.recovery import Disposition, Recovery, Verdict
 from tangle_drake.scenario import BinConfig
 from tangle_drake.station import part_bodies
 
@@ -84,9 +87,18 @@ class PickRecord:
     """Wall time of IK and trajectories, over every candidate tried, s."""
     execution_s: float = 0.0
     """Robot (simulated) time from the start of the approach to the return home, s."""
+    estimate: PayloadEstimate | None = None
+    """Closed loop: the first weighing at the top of the lift."""
+    verdict: Verdict | None = None
+    """Closed loop: what that weighing (and the fingers) said came up."""
+    recoveries: list[Recovery] = field(default_factory=list)
+    """Closed loop: what was done about it, in order (weighing again, shaking, putting back)."""
+    disposition: Disposition | None = None
+    """Closed loop: how the grasp ended (delivered to the tray, empty, put back)."""
 
     def describe(self) -> str:
-        """One line for people: the outcome, then the timings."""
+        """One line for people: the outcome (and, closed loop, the weighing and what was done
+        about it), then the timings."""
         if self.outcome is Outcome.FAILED:
             what = f"failed: {self.reason}"
         else:
@@ -99,6 +111,11 @@ class PickRecord:
             rejected = f", {len(self.rejected)} rejected before" if self.rejected else ""
             tried = (f" | candidate #{self.rank} (graspability {self.candidate.score:.2f}{p}"
                      f"{rejected})")
+        if self.disposition is not None:
+            weighed = "" if self.estimate is None or not self.estimate.ready else (
+                f"weighed {self.estimate.parts:.2f} parts, ")
+            steps = "".join(f"{r.value}, " for r in self.recoveries)
+            tried += f" | {weighed}{steps}{self.disposition.value}"
         return (f"pick {self.index}: {what}{tried} | perception {self.perception_s * 1e3:.0f} ms, "
                 f"CNN {self.cnn_s * 1e3:.0f} ms, planning {self.planning_s * 1e3:.0f} ms, "
                 f"execution {self.execution_s:.1f} s")
@@ -155,3 +172,31 @@ class LiftMonitor(LeafSystem):
 
     def _calc_count(self, context: Context, output: BasicVector) -> None:
         output.SetAtIndex(0, float(len(self.lifted_parts(context))))
+
+
+class TrayMonitor(LeafSystem):
+    """Simulation only: the number of parts lying in the output tray, from true body poses
+    (what a closed-loop run delivered, counted by the simulation, not by the estimator).
+
+    A part counts when its centre is over the tray's floor and below its rim plus ``margin``
+    (one still hanging from the gripper above the tray does not). Input ``body_poses``,
+    output ``tray_count``.
+    """
+
+    def __init__(self, plant: MultibodyPlant, tray: BinConfig, margin: float = 0.02) -> None:
+        super().__init__()
+        self._parts = [int(body.index()) for body in part_bodies(plant)]
+        self._tray = tray
+        self._top = tray.floor_height + tray.wall_height + margin
+        self._poses = self.DeclareAbstractInputPort(
+            "body_poses", plant.get_body_poses_output_port().Allocate())
+        self.DeclareVectorOutputPort("tray_count", 1, self._calc_count)
+
+    def parts_in_tray(self, context: Context) -> list[int]:
+        """Body indices of the parts in the tray now."""
+        poses = self._poses.Eval(context)
+        return [i for i in self._parts if inside_bin(self._tray, poses[i].translation())
+                and poses[i].translation()[2] < self._top]
+
+    def _calc_count(self, context: Context, output: BasicVector) -> None:
+        output.SetAtIndex(0, float(len(self.parts_in_tray(context))))

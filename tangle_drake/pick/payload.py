@@ -1,9 +1,10 @@
 """Weighing what came up: the payload estimator, from the wrist force/torque sensor alone.
 
-The pick planner says when (``phase``): ``TARE`` with the open gripper at the pre-grasp, and
-``WEIGH`` at the top of the lift. The estimator takes samples only while the carrier is
-stopped, and only once it has been stopped for ``settle_time`` (a load swings on after the arm
-stops); any motion starts the window again, so nothing is weighed while the arm accelerates.
+The pick planner says when (``request``): ``TARE`` with the open gripper at the pre-grasp,
+and ``WEIGH`` at the top of the lift (each request anew, so a second weighing starts afresh).
+The estimator takes samples only while the carrier is stopped, and only once it has been
+stopped for ``settle_time`` (a load swings on after the arm stops); any motion starts the
+window again, so nothing is weighed while the arm accelerates.
 The estimate is the mean vertical support force over the window minus the tare, in part
 weights. It reads no ``sim.`` port: on hardware it is the same system.
 
@@ -35,6 +36,15 @@ class PayloadPhase(enum.Enum):
     """The gripper holds nothing: measure what the sensor reads then."""
     WEIGH = "weigh"
     """The gripper holds what came up: weigh it."""
+
+
+@dataclass(frozen=True)
+class PayloadRequest:
+    """The planner's request: what to do, and which request this is (a new ``serial`` starts
+    a new tare or weighing even in the same phase)."""
+
+    phase: PayloadPhase = PayloadPhase.IDLE
+    serial: int = 0
 
 
 @dataclass(frozen=True)
@@ -87,13 +97,21 @@ class PayloadEstimate:
     trusted: bool = False
     """Near a whole number, not swinging: the count may be acted on."""
     samples: int = 0
+    support: float = math.nan
+    """The weighing's mean vertical support force, N (the put-back's force limit is below
+    it)."""
+    part_weight: float = math.nan
+    """One part's weight, N."""
+    tared: bool = False
+    """A full window of tare samples has been taken since the last ``TARE`` request."""
 
 
 @dataclass(frozen=True)
 class _State:
-    phase: PayloadPhase = PayloadPhase.IDLE
+    request: PayloadRequest = PayloadRequest()
     stopped_since: float | None = None
     tare: float | None = None
+    tared: bool = False
     window: tuple[float, ...] = ()
     estimate: PayloadEstimate = field(default_factory=PayloadEstimate)
 
@@ -112,15 +130,16 @@ def estimate_from(samples: np.ndarray, tare: float, settings: PayloadSettings,
                         + math.erf((0.5 + fraction) / (std * math.sqrt(2))))
     swinging = spread > settings.swing_factor * settings.sensor_noise
     return PayloadEstimate(True, parts, count, std, confidence, swinging,
-                           fraction <= settings.max_fraction and not swinging, len(samples))
+                           fraction <= settings.max_fraction and not swinging, len(samples),
+                           float(np.mean(samples)), weight)
 
 
 class PayloadEstimator(LeafSystem):
     """Counts the parts the gripper holds from the wrist sensor (see the module docstring).
 
     Inputs: ``force_torque`` (the station's ``wrist.force_torque``), ``carrier_state`` (the
-    carrier's ``state_measured``: positions then velocities), ``phase`` (a
-    :class:`PayloadPhase`). Output ``payload`` (a :class:`PayloadEstimate`).
+    carrier's ``state_measured``: positions then velocities), ``request`` (a
+    :class:`PayloadRequest`). Output ``payload`` (a :class:`PayloadEstimate`).
     """
 
     def __init__(self, settings: PayloadSettings, carrier_state_size: int) -> None:
@@ -129,13 +148,14 @@ class PayloadEstimator(LeafSystem):
         self._samples = max(1, round(settings.window / settings.period))
         self._force = self.DeclareVectorInputPort("force_torque", 6)
         self._carrier = self.DeclareVectorInputPort("carrier_state", carrier_state_size)
-        self._phase = self.DeclareAbstractInputPort("phase",
-                                                    AbstractValue.Make(PayloadPhase.IDLE))
+        self._request = self.DeclareAbstractInputPort("request",
+                                                      AbstractValue.Make(PayloadRequest()))
         self._state = self.DeclareAbstractState(AbstractValue.Make(_State()))
         self.DeclarePeriodicUnrestrictedUpdateEvent(settings.period, 0.0, self._update)
         self.DeclareAbstractOutputPort(
             "payload", lambda: AbstractValue.Make(PayloadEstimate()),
-            lambda context, value: value.set_value(self._get(context).estimate),
+            lambda context, value: value.set_value(replace(
+                self._get(context).estimate, tared=self._get(context).tared)),
             {self.abstract_state_ticket(self._state)})
 
     @property
@@ -153,11 +173,13 @@ class PayloadEstimator(LeafSystem):
 
     def _next(self, context: Context, s: _State) -> _State:
         t = context.get_time()
-        phase = self._phase.Eval(context) if self._phase.HasValue(context) else PayloadPhase.IDLE
-        if phase is not s.phase:  # a new tare or weighing starts from nothing
-            s = replace(s, phase=phase, window=())
+        request = self._request.Eval(context) if self._request.HasValue(context) \
+            else PayloadRequest()
+        phase = request.phase
+        if request != s.request:  # a new tare or weighing starts from nothing
+            s = replace(s, request=request, window=())
             if phase is PayloadPhase.TARE:
-                s = replace(s, tare=None)
+                s = replace(s, tare=None, tared=False)
             if phase is PayloadPhase.WEIGH:
                 s = replace(s, estimate=PayloadEstimate())
         if phase is PayloadPhase.IDLE:
@@ -174,7 +196,7 @@ class PayloadEstimator(LeafSystem):
         window = (*s.window, fz)[-self._samples:]
         s = replace(s, window=window)
         if phase is PayloadPhase.TARE:
-            return replace(s, tare=float(np.mean(window)))
+            return replace(s, tare=float(np.mean(window)), tared=len(window) >= self._samples)
         if len(window) >= self._samples and s.tare is not None and not s.estimate.ready:
             return replace(s, estimate=estimate_from(np.array(window), s.tare, self._settings))
         return s

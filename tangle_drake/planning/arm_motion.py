@@ -28,7 +28,7 @@ from tangle_drake.planning.grasp_poses import (
     symmetric_grasps,
 )
 from tangle_drake.planning.ik import ArmIk, IkSettings
-from tangle_drake.planning.motion import PickMotion, PlanningError
+from tangle_drake.planning.motion import PickMotion, PlanningError, ShakeSettings
 from tangle_drake.planning.planning_model import PlanningModel
 from tangle_drake.planning.trajectory import (
     chain,
@@ -80,6 +80,11 @@ class ArmMotionSettings:
     part falls to the floor there."""
     home: np.ndarray = field(default_factory=lambda: HOME.copy())
     """Where the robot waits while the camera looks (15 joints)."""
+    shake: ShakeSettings = field(default_factory=ShakeSettings)
+    """The shake's amplitude and cycles (its joint limits: ``velocity_limit`` and
+    ``shake_acceleration``)."""
+    shake_acceleration: float = 6.0
+    """Per joint during a shake, rad/s²: brisker than the planning limit, within the robot's."""
     approach: ApproachSettings = field(default_factory=ApproachSettings)
     ik: IkSettings = field(default_factory=IkSettings)
 
@@ -97,9 +102,9 @@ class ArmMotion:
     measured_size = 2 * _NUM_JOINTS
 
     def __init__(self, bin_config: BinConfig, settings: ArmMotionSettings | None = None,
-                 model: PlanningModel | None = None) -> None:
+                 model: PlanningModel | None = None, tray: BinConfig | None = None) -> None:
         self.settings = settings or ArmMotionSettings()
-        self.model = model or PlanningModel(bin_config)
+        self.model = model or PlanningModel(bin_config, tray=tray)
         self.ik = ArmIk(self.model, self.settings.ik)
         self.bin = bin_config
         self.q_home = self.model.full_q(self.settings.home)
@@ -134,17 +139,49 @@ class ArmMotion:
         approach = self._free_path([q_now, q_pre], [q_now, q_lift, q_pre], "approach")
         s = self.settings
         slow = self._straight(q_slow, q_grasp, "descent")
+        # Planned in this order, so the first leg that fails is the one reported.
+        descend = chain([self._legs(self._straight(q_pre, q_slow, "descent"), s.cartesian_speed),
+                         self._legs(slow, s.slow_speed)])
+        lift = chain([self._legs(slow[::-1], s.slow_speed),
+                      self._legs(self._straight(q_slow, q_lift, "lift"), s.cartesian_speed)])
+        transfer = self._legs(self._free_path([q_lift, q_place], None, "transfer"))
+        home = self._legs(self._free_path([q_place, self.q_home], None, "return home")
+                          if self.X_place is not None else [self.q_home, self.q_home])
+        try:  # straight home from the lift; else the way the transfer and return go
+            retreat = self._legs(self._free_path([q_lift, self.q_home], None, "retreat"))
+        except PlanningError:
+            retreat = chain([transfer, home])
         return PickMotion(
-            approach=self._legs(approach),
-            descend=chain([self._legs(self._straight(q_pre, q_slow, "descent"),
-                                      s.cartesian_speed),
-                           self._legs(slow, s.slow_speed)]),
-            lift=chain([self._legs(slow[::-1], s.slow_speed),
-                        self._legs(self._straight(q_slow, q_lift, "lift"), s.cartesian_speed)]),
-            transfer=self._legs(self._free_path([q_lift, q_place], None, "transfer")),
-            home=self._legs(self._free_path([q_place, self.q_home], None, "return home")
-                            if self.X_place is not None else [self.q_home, self.q_home]),
-            X_WT=poses.grasp.GetAsMatrix4())
+            approach=self._legs(approach), descend=descend, lift=lift,
+            transfer=transfer, home=home, retreat=retreat, X_WT=poses.grasp.GetAsMatrix4())
+
+    def plan_shake(self, hold: np.ndarray) -> PiecewisePolynomial:
+        """Up and down by the shake's offsets, by IK from the held pose, checked clear."""
+        q_hold = self.model.full_q(hold)
+        X_hold = self.model.tcp_pose(q_hold)
+        configurations = []
+        for dz in self.settings.shake.offsets():
+            X = RigidTransform(X_hold.rotation(), X_hold.translation() + np.array([0.0, 0.0, dz]))
+            configurations.append(q_hold if dz == 0.0 else
+                                  self._solve(X, q_hold, "shake", free=False))
+        s = self.settings
+        path = [self.model.nextage_q(q) for q in [q_hold, *configurations]]
+        return chain([rest_to_rest(a, b, s.velocity_limit, s.shake_acceleration)
+                      for a, b in itertools.pairwise(path)])
+
+    def plan_lower(self, hold: np.ndarray, X_WT: np.ndarray,
+                   clearance: float) -> PiecewisePolynomial:
+        """Straight down to ``clearance`` above the grasp, at the slow speed."""
+        q_hold = self.model.full_q(hold)
+        X_hold = self.model.tcp_pose(q_hold)
+        z = min(X_hold.translation()[2], float(np.asarray(X_WT)[2, 3]) + clearance)
+        X_low = RigidTransform(X_hold.rotation(), [*X_hold.translation()[:2], z])
+        q_low = self._solve(X_low, q_hold, "put-back", free=False)
+        return self._legs(self._straight(q_hold, q_low, "put-back"), self.settings.slow_speed)
+
+    def plan_line(self, start: np.ndarray, end: np.ndarray) -> PiecewisePolynomial:
+        s = self.settings
+        return rest_to_rest(start, end, s.velocity_limit, s.acceleration_limit)
 
     def _solve(self, X_WT: RigidTransform, seed: np.ndarray, name: str, free: bool,
                free_yaw: bool = False) -> np.ndarray:

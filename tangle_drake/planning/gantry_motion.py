@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 from pydrake.math import RigidTransform
+from pydrake.trajectories import PiecewisePolynomial
 
 from tangle_drake.drivers.joint_position import gantry_home
 from tangle_drake.drivers.limits import RobotLimits
@@ -19,7 +20,7 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses
-from tangle_drake.planning.motion import PickMotion, PlanningError
+from tangle_drake.planning.motion import PickMotion, PlanningError, ShakeSettings
 from tangle_drake.planning.trajectory import MIN_DURATION, chain, hold, rest_to_rest
 from tangle_drake.scenario import BinConfig
 
@@ -34,15 +35,17 @@ FREE_ACCELERATION = np.array([5.0, 5.0, 5.0, 15.0])
 SLOW_SPEED = 0.03
 """Tool speed over the last and first centimetres at the pile, m/s (the arm's too)."""
 PLACE_DROP = 0.1
-"""The part is released this far below the parked gantry and falls to the floor, m."""
+"""Without a tray, the part is released this far below the parked gantry and falls to the
+floor, m."""
 
 
 class GantryMotion:
     """``Motion`` for the gantry: a grasp pose *is* a command (no IK), legs are straight.
 
     ``limits`` are the gantry model's (``drivers.limits.station_limits`` of its scenario): its
-    travel. ``return_home=False`` ends the pick at the top of the lift (the transfer and the
-    way home are empty): enough to count what came up, which is all a benchmark asks.
+    travel. ``return_home=False`` ends the pick at the top of the lift (the transfer, the way
+    home and the retreat are empty): enough to count what came up, which is all the open-loop
+    benchmark asks. ``place`` is where the tool centre releases a part (over the tray).
     """
 
     command_size = 4
@@ -50,15 +53,19 @@ class GantryMotion:
 
     def __init__(self, bin_config: BinConfig, limits: RobotLimits,
                  approach: ApproachSettings | None = None, return_home: bool = True,
-                 model: str = "gantry") -> None:
+                 model: str = "gantry", place: np.ndarray | None = None,
+                 shake: ShakeSettings | None = None) -> None:
         if len(limits.joint_names) != self.command_size:
             raise TangleDrakeError(f"the gantry model {model!r} must have 4 joints")
         self.command_port = f"{model}.position"
         self.measured_port = f"{model}.state_measured"
         self.bin = bin_config
         self.home = gantry_home(bin_config)
-        self.place = self.home[:3] - np.array([0.0, 0.0, PLACE_DROP])
+        # Gantry coordinates: the yaw link sits above the tool centre by the TCP offset.
+        self.place = self.home[:3] - np.array([0.0, 0.0, PLACE_DROP]) if place is None \
+            else np.asarray(place, float) + np.array([0.0, 0.0, DEFAULT_GRIPPER.tcp_offset])
         self.approach = approach or ApproachSettings()
+        self.shake = shake or ShakeSettings()
         self.return_home = return_home
         self.lower = limits.position_lower.copy()
         self.upper = limits.position_upper.copy()
@@ -87,19 +94,47 @@ class GantryMotion:
         pre, slow, grasp, lift = (self.command_for(X, q_now[3]) for X in
                                   (poses.pregrasp, poses.slow_start, poses.grasp, poses.lift))
 
-        def leg(a: np.ndarray, b: np.ndarray, speed: float = math.inf, free: bool = False):
-            return rest_to_rest(a, b, FREE_VELOCITY if free else VELOCITY,
-                                FREE_ACCELERATION if free else ACCELERATION,
-                                float(np.linalg.norm(b[:3] - a[:3])), speed)
-
+        leg = _leg
         if self.return_home:
             place = np.array([*self.place, lift[3]])
-            transfer, home = leg(lift, place), leg(place, self.home)
+            transfer, home, retreat = leg(lift, place), leg(place, self.home), leg(lift, self.home)
         else:
-            transfer = home = hold(lift, MIN_DURATION)
+            transfer = home = retreat = hold(lift, MIN_DURATION)
         return PickMotion(
             approach=leg(q_now, pre, free=True),
             descend=chain([leg(pre, slow, free=True), leg(slow, grasp, SLOW_SPEED)]),
             lift=chain([leg(grasp, slow, SLOW_SPEED), leg(slow, lift)]),
-            transfer=transfer, home=home, X_WT=poses.grasp.GetAsMatrix4())
+            transfer=transfer, home=home, retreat=retreat, X_WT=poses.grasp.GetAsMatrix4())
+
+    def plan_shake(self, hold_command: np.ndarray) -> PiecewisePolynomial:
+        s = self.shake
+        points = [np.asarray(hold_command, float) + np.array([0.0, 0.0, dz, 0.0])
+                  for dz in s.offsets()]
+        if any(np.any(p < self.lower) or np.any(p > self.upper) for p in points):
+            raise PlanningError(FailureKind.UNREACHABLE, "the shake leaves the gantry's travel")
+        velocity = np.array([s.speed] * 3 + [VELOCITY[3]])
+        acceleration = np.array([s.acceleration] * 3 + [ACCELERATION[3]])
+        starts = [np.asarray(hold_command, float), *points[:-1]]
+        return chain([rest_to_rest(a, b, velocity, acceleration)
+                      for a, b in zip(starts, points, strict=True)])
+
+    def plan_lower(self, hold_command: np.ndarray, X_WT: np.ndarray,
+                   clearance: float) -> PiecewisePolynomial:
+        start = np.asarray(hold_command, float)
+        grasp_z = float(np.asarray(X_WT)[2, 3]) + DEFAULT_GRIPPER.tcp_offset
+        end = start.copy()
+        end[2] = min(start[2], grasp_z + clearance)
+        return _leg(start, end, SLOW_SPEED)
+
+    def plan_line(self, start: np.ndarray, end: np.ndarray) -> PiecewisePolynomial:
+        return _leg(np.asarray(start, float), np.asarray(end, float))
+
+
+def _leg(a: np.ndarray, b: np.ndarray, speed: float = math.inf,
+         free: bool = False) -> PiecewisePolynomial:
+    """A straight gantry move, the tool's speed capped at ``speed``; ``free``: an empty
+    gripper's move that touches nothing, at the faster limits."""
+    return rest_to_rest(a, b, FREE_VELOCITY if free else VELOCITY,
+                        FREE_ACCELERATION if free else ACCELERATION,
+                        float(np.linalg.norm(b[:3] - a[:3])), speed)
 

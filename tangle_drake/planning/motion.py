@@ -29,12 +29,36 @@ class PlanningError(Exception):
 
 
 @dataclass(frozen=True)
+class ShakeSettings:
+    """The up-and-down shake that makes a second part let go of the one held (SI units)."""
+
+    amplitude: float = 0.02
+    """How far the tool goes up and down from where it was, m."""
+    cycles: int = 2
+    acceleration: float = 6.0
+    """The tool centre's acceleration limit, m/s² (well under g, so a held part stays put)."""
+    speed: float = 0.5
+    """The tool centre's speed limit, m/s."""
+
+    def __post_init__(self) -> None:
+        if not (self.amplitude > 0 and self.cycles >= 1 and self.acceleration > 0
+                and self.speed > 0):
+            raise ValueError("ShakeSettings: amplitude, acceleration and speed must be "
+                             "positive, cycles at least 1")
+
+    def offsets(self) -> list[float]:
+        """The vertical offsets the tool visits, in order, ending at 0."""
+        return [*[sign * self.amplitude for _ in range(self.cycles) for sign in (-1, 1)], 0.0]
+
+
+@dataclass(frozen=True)
 class PickMotion:
     """One planned pick: a trajectory of commands per moving phase, each starting at t = 0.
 
     The approach ends with the open fingers above the grasp, the descent at the grasp, the
-    lift clear of the bin, the transfer over the place location, and home where the robot
-    waits while the camera looks.
+    lift clear of the bin, the transfer over the place location (the output tray), home where
+    the robot waits while the camera looks, and the retreat goes from the top of the lift
+    straight home (after an empty grasp, or a load put back).
     """
 
     approach: PiecewisePolynomial
@@ -42,6 +66,7 @@ class PickMotion:
     lift: PiecewisePolynomial
     transfer: PiecewisePolynomial
     home: PiecewisePolynomial
+    retreat: PiecewisePolynomial
     X_WT: np.ndarray
     """The grasp pose used (4x4): the candidate's, or its twin turned 180° about the approach,
     pressed a little deeper (:mod:`tangle_drake.planning.grasp_poses`)."""
@@ -63,3 +88,15 @@ class Motion(Protocol):
     def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray) -> PickMotion:
         """The whole pick for tool pose ``X_WT`` from the state ``measured``; raises
         :class:`PlanningError` when it cannot be done."""
+
+    def plan_shake(self, hold: np.ndarray) -> PiecewisePolynomial:
+        """A shake of the tool about the command ``hold`` (up and down, :class:`ShakeSettings`),
+        ending where it began; raises :class:`PlanningError`."""
+
+    def plan_lower(self, hold: np.ndarray, X_WT: np.ndarray,
+                   clearance: float) -> PiecewisePolynomial:
+        """From ``hold`` straight down, slowly, to ``clearance`` above the grasp pose ``X_WT``
+        (to put a load back on the pile); raises :class:`PlanningError`."""
+
+    def plan_line(self, start: np.ndarray, end: np.ndarray) -> PiecewisePolynomial:
+        """A short move between two commands near each other (back up after a put-back)."""

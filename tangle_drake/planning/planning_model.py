@@ -41,16 +41,20 @@ class Clearance(NamedTuple):
 
 
 class PlanningModel:
-    """A continuous-time plant of the robot, its gripper and the bin, with one context.
+    """A continuous-time plant of the robot, its gripper, the bin and the output tray (if
+    any), with one context.
 
     Not thread-safe: every query moves the one context.
     """
 
-    def __init__(self, bin_config: BinConfig, spec: GripperSpec = DEFAULT_GRIPPER) -> None:
+    def __init__(self, bin_config: BinConfig, spec: GripperSpec = DEFAULT_GRIPPER,
+                 tray: BinConfig | None = None) -> None:
         builder = DiagramBuilder()
         plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)
         self.nextage, self.gripper = add_nextage_with_gripper(plant)
         make_parser(plant).AddModelsFromString(bin_sdf(bin_config), "sdf")
+        if tray is not None:
+            make_parser(plant).AddModelsFromString(bin_sdf(tray, "tray", stand=False), "sdf")
         plant.Finalize()
         # The wrist's last two links hold the gripper at fixed gaps along the tool axis
         # (7 mm, 30 mm): their pairs with it never close, and a clearance bound would trip

@@ -1,13 +1,15 @@
 """The simulated station: the scenario's models, bin, ground, pile and cameras in one plant, and
 each model's simulated driver around it.
 
-The plant is built in a fixed order (directives, bin, ground, pile), so the same scenario gives
-the same plant, and contact physics (which is chaotic) the same results, every time. Drivers
+The plant is built in a fixed order (directives, bin, ground, pile, tray), so the same scenario
+gives the same plant, and contact physics (which is chaotic) the same results, every time. Drivers
 come from ``scenario.model_drivers`` (:mod:`tangle_drake.drivers`); every model with actuators
 must have one, or its servos would be off and it would fall.
 """
 
 from __future__ import annotations
+
+import itertools
 
 import numpy as np
 from pydrake.geometry import Box, Meshcat, MeshcatVisualizer, SceneGraph
@@ -18,7 +20,7 @@ from pydrake.multibody.tree import Body, ModelInstanceIndex
 from pydrake.systems.framework import Context, Diagram, DiagramBuilder
 from pydrake.systems.sensors import CameraConfig
 
-from tangle_drake.bin_model import bin_sdf
+from tangle_drake.bin_model import bin_boxes, bin_sdf
 from tangle_drake.drivers import camera, force_torque
 from tangle_drake.drivers.registry import driver_module
 from tangle_drake.errors import TangleDrakeError
@@ -143,6 +145,9 @@ def build_simulated_station(scenario: Scenario,
     parser.AddModelsFromString(bin_sdf(scenario.bin), "sdf")
     add_ground(plant)
     add_pile_parts(plant, scenario)
+    if scenario.tray is not None:  # last: the pile's bodies and geometries keep their order
+        _check_tray_out_of_view(scenario)
+        parser.AddModelsFromString(bin_sdf(scenario.tray, "tray", stand=False), "sdf")
     plant.Finalize()
     _check_drivers(plant, scenario)
     for name, config in scenario.model_drivers.items():
@@ -179,6 +184,25 @@ def _check_drivers(plant: MultibodyPlant, scenario: Scenario) -> None:
             raise TangleDrakeError(f"model {name!r} has actuators but no entry in the "
                                    "scenario's model_drivers (e.g. !NextageDriver, "
                                    "!GantryDriver, !ParallelJawDriver)")
+
+
+def _check_tray_out_of_view(scenario: Scenario) -> None:
+    """The tray must not show in the top camera's image: perception reads the whole depth
+    image's levels, and a tray in view changes the graspability index's candidates."""
+    tray = scenario.tray
+    model = camera.camera_model(scenario)
+    width, height = model.intrinsics.width, model.intrinsics.height
+    for name, (center, size) in bin_boxes(tray).items():
+        if name == "stand":  # the tray has none
+            continue
+        for corner in itertools.product(*[(c - s / 2, c + s / 2) for c, s in zip(
+                center, size, strict=True)]):
+            u, v, depth = model.world_to_pixel(np.array(corner))
+            if depth > 0 and 0 <= u < width and 0 <= v < height:
+                raise TangleDrakeError(
+                    f"scenario field 'tray': the tray shows in the top camera's view (its "
+                    f"corner {np.round(corner, 3).tolist()} at pixel ({u:.0f}, {v:.0f})); "
+                    "move it further from the bin")
 
 
 def _set_initial_positions(plant: MultibodyPlant, scenario: Scenario) -> None:

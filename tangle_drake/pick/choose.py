@@ -1,0 +1,85 @@
+"""Choosing the grasp to try: the selection's order, minus what cannot or should not be done.
+
+The planner tries candidates in the selection's order (``scored_candidates``, best first,
+with ``selected_grasp`` at the front). A candidate is turned down, with its
+:class:`~tangle_drake.failures.FailureKind`, if it has no world pose, if it repeats a grasp
+that came up empty where the pile has not changed since (same place and closing direction,
+fingertips at the same depth), or if the ``Motion`` cannot plan it.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tangle_drake.failures import FailureKind
+from tangle_drake.pick.outcome import PickRecord, Rejection
+from tangle_drake.planning.motion import Motion, PickMotion, PlanningError
+
+
+@dataclass(frozen=True)
+class EmptyGrasp:
+    """A grasp that came up empty: where, and how deep the pile was there."""
+
+    X_WT: np.ndarray
+    depth_m: float
+
+
+@dataclass(frozen=True)
+class RepeatRule:
+    """When a candidate repeats an empty grasp (SI units)."""
+
+    distance: float
+    angle_deg: float
+    depth: float
+    """Fingertip depths this close mean the pile there has not changed, m."""
+
+    def repeats(self, candidate: Any, empty: Sequence[EmptyGrasp]) -> bool:
+        cos_limit = np.cos(np.radians(self.angle_deg))
+        X = candidate.pose
+        return any(np.linalg.norm(X[:3, 3] - e.X_WT[:3, 3]) < self.distance
+                   and abs(float(X[:3, 1] @ e.X_WT[:3, 1])) > cos_limit
+                   and abs(float(candidate.depth_m) - e.depth_m) < self.depth for e in empty)
+
+
+def rank_scored(scored: list[Any], selected: Any = None) -> list[tuple[Any, float | None]]:
+    """``(candidate, P(not tangled))`` in the selection's order (``scored_candidates`` are
+    best first, :func:`~tangle_drake.tangle_cnn.selection.rank`), with ``selected`` at the
+    front."""
+    ranked = [(s.candidate, s.p_not_tangled) for s in scored]
+    if selected is not None:
+        key = (selected.u, selected.v, selected.angle_deg)
+        front = [item for item in ranked if (item[0].u, item[0].v, item[0].angle_deg) == key]
+        ranked = front + [item for item in ranked if item not in front]
+    return ranked
+
+
+def choose(record: PickRecord, ranked: list[tuple[Any, float | None]], motion: Motion,
+           measured: np.ndarray, empty: Sequence[EmptyGrasp],
+           rule: RepeatRule) -> PickMotion | None:
+    """Plan the first candidate of ``ranked`` that can be done; fills ``record``'s candidate,
+    rank, P(not tangled), rejections and planning time. ``None`` if none can."""
+    start = time.perf_counter()
+    plan = None
+    for rank, (candidate, p_not_tangled) in enumerate(ranked):
+        if candidate.pose is None:
+            record.rejected.append(Rejection(rank, FailureKind.NO_POSE,
+                                             "the candidate has no X_WT"))
+            continue
+        if rule.repeats(candidate, empty):
+            record.rejected.append(Rejection(rank, FailureKind.REPEAT,
+                                             "a grasp there came up empty"))
+            continue
+        try:
+            plan = motion.plan_pick(candidate.pose, measured)
+        except PlanningError as error:
+            record.rejected.append(Rejection(rank, error.kind, error.detail))
+            continue
+        record.candidate, record.rank, record.p_not_tangled = candidate, rank, p_not_tangled
+        break
+    record.planning_s = time.perf_counter() - start
+    return plan

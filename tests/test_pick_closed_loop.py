@@ -1,0 +1,242 @@
+"""The closed loop of the pick state machine, with a stand-in manipulator and a stand-in scale:
+several => shake => one => delivered; several => shake => several => put back; nothing => a
+fresh look elsewhere; not sure => weighed again; K grasps without a delivery => give up; the
+put-back stops where the load rests on the pile. And the rules alone."""
+
+import numpy as np
+import pytest
+from pydrake.common.value import AbstractValue
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder, LeafSystem
+from pydrake.systems.primitives import ConstantVectorSource
+from test_pick_planner import FakeMotion, candidate
+
+from tangle_drake.failures import FailureKind
+from tangle_drake.pick.payload import PayloadEstimate, PayloadPhase, PayloadRequest
+from tangle_drake.pick.planner import Mode, PickPlanner, PickSettings
+from tangle_drake.pick.recovery import (
+    Disposition,
+    Recovery,
+    RecoverySettings,
+    Verdict,
+    after_put_back,
+    after_weighing,
+    judge,
+)
+
+PART_WEIGHT = 0.32
+GRIPPER = 4.22
+
+
+class FakeScale(LeafSystem):
+    """Answers each new weighing request with the next of ``weighings`` (a count, or None for
+    a weighing that cannot be trusted); tares at once. Also plays the wrist sensor, whose
+    support drops by ``rest_drop`` N once the planner has been putting back for 0.3 s."""
+
+    def __init__(self, weighings, rest_drop: float = 0.0) -> None:
+        super().__init__()
+        self.weighings = list(weighings)
+        self.answers: dict[int, PayloadEstimate] = {}
+        self.rest_drop = rest_drop
+        self.request = self.DeclareAbstractInputPort("request",
+                                                     AbstractValue.Make(PayloadRequest()))
+        self.mode = self.DeclareAbstractInputPort("mode", AbstractValue.Make(Mode.SETTLE))
+        self.put_back_since = None
+        self.DeclareAbstractOutputPort("payload", lambda: AbstractValue.Make(PayloadEstimate()),
+                                       self._calc)
+        self.DeclareVectorOutputPort("wrench", 6, self._wrench, {self.time_ticket(),
+                                                                 self.all_input_ports_ticket()})
+
+    def _calc(self, context, value) -> None:
+        request = self.request.Eval(context)
+        if request.phase is PayloadPhase.TARE:
+            value.set_value(PayloadEstimate(tared=True))
+        elif request.phase is PayloadPhase.WEIGH:
+            if request.serial not in self.answers:
+                count = self.weighings.pop(0) if self.weighings else 0
+                self.answers[request.serial] = PayloadEstimate(
+                    ready=True, parts=float(count if count is not None else 1.5),
+                    count=1 if count is None else count, std=0.02,
+                    confidence=0.5 if count is None else 0.99, trusted=count is not None,
+                    samples=20, support=GRIPPER + PART_WEIGHT * (count or 0),
+                    part_weight=PART_WEIGHT)
+            value.set_value(self.answers[request.serial])
+        else:
+            value.set_value(PayloadEstimate())
+
+    def _wrench(self, context, out) -> None:
+        putting_back = self.mode.Eval(context) is Mode.PUT_BACK
+        if putting_back and self.put_back_since is None:
+            self.put_back_since = context.get_time()
+        resting = putting_back and context.get_time() - self.put_back_since > 0.3
+        out.SetFromVector([0, 0, GRIPPER + 2 * PART_WEIGHT - (self.rest_drop if resting else 0),
+                           0, 0, 0])
+
+
+def run(candidates, weighings, motion=None, width=0.003, picks=1, rest_drop=0.0,
+        recovery=None, duration=60.0):
+    motion = motion or FakeMotion()
+    settings = PickSettings(max_picks=picks, recovery=recovery or RecoverySettings())
+    builder = DiagramBuilder()
+    planner = builder.AddSystem(PickPlanner(motion, settings))
+    source = builder.AddSystem(_Candidates(candidates))
+    builder.Connect(source.get_output_port(), planner.GetInputPort("candidates"))
+    measured = builder.AddSystem(ConstantVectorSource(np.zeros(4)))
+    builder.Connect(measured.get_output_port(), planner.GetInputPort("arm.state_measured"))
+    gripper = builder.AddSystem(ConstantVectorSource(np.array([width, 0.0])))
+    builder.Connect(gripper.get_output_port(), planner.GetInputPort("gripper.state_measured"))
+    scale = builder.AddSystem(FakeScale(weighings, rest_drop))
+    builder.Connect(planner.GetOutputPort("payload.request"), scale.GetInputPort("request"))
+    builder.Connect(planner.GetOutputPort("mode"), scale.GetInputPort("mode"))
+    builder.Connect(scale.GetOutputPort("payload"), planner.GetInputPort("payload"))
+    builder.Connect(scale.GetOutputPort("wrench"), planner.GetInputPort("wrist.force_torque"))
+    simulator = Simulator(builder.Build())
+    context = planner.GetMyContextFromRoot(simulator.get_context())
+    modes, times = [], {}
+    while simulator.get_context().get_time() < duration:
+        simulator.AdvanceTo(simulator.get_context().get_time() + 0.01)
+        mode = planner.GetOutputPort("mode").Eval(context)
+        if not modes or modes[-1] is not mode:
+            modes.append(mode)
+            times.setdefault(mode, simulator.get_context().get_time())
+        if mode is Mode.DONE:
+            break
+    return planner.GetOutputPort("picks").Eval(context), modes, motion, times
+
+
+class _Candidates(LeafSystem):
+    def __init__(self, candidates) -> None:
+        super().__init__()
+        self.DeclareAbstractOutputPort("candidates", lambda: AbstractValue.Make([]),
+                                       lambda c, v: v.set_value(list(candidates)))
+
+
+def test_several_are_shaken_and_one_left_is_delivered():
+    records, modes, motion, _ = run([candidate(0, 0.9)], [2, 1])
+    (record,) = records
+    assert record.verdict is Verdict.SEVERAL and record.estimate.count == 2
+    assert record.recoveries == [Recovery.SHAKE] and record.disposition is Disposition.DELIVERED
+    assert motion.shakes == 1
+    assert modes[:12] == [Mode.SETTLE, Mode.PERCEIVE, Mode.APPROACH, Mode.TARE, Mode.DESCEND,
+                          Mode.CLOSE, Mode.LIFT, Mode.WEIGH, Mode.SHAKE, Mode.WEIGH,
+                          Mode.TRANSFER, Mode.RELEASE]
+    assert modes[-1] is Mode.DONE
+
+
+def test_several_after_a_shake_are_put_back_and_the_gripper_weighed_open():
+    records, modes, motion, _ = run([candidate(0, 0.9), candidate(1, 0.8)], [2, 2, 0, 1])
+    first, second = records
+    assert first.recoveries == [Recovery.SHAKE, Recovery.PUT_BACK]
+    assert first.disposition is Disposition.PUT_BACK and motion.lowered == 1
+    for mode in (Mode.PUT_BACK, Mode.OPEN, Mode.WEIGH_OPEN, Mode.RAISE, Mode.RETREAT):
+        assert mode in modes
+    assert second.disposition is Disposition.DELIVERED  # then it goes on
+
+
+def test_a_part_hooked_on_an_open_finger_is_shaken_off():
+    records, _, motion, _ = run([candidate(0, 0.9), candidate(1, 0.8)], [2, 2, 1, 0, 1])
+    assert records[0].recoveries == [Recovery.SHAKE, Recovery.PUT_BACK, Recovery.SHAKE_OFF]
+    assert motion.shakes == 2 and records[0].disposition is Disposition.PUT_BACK
+
+
+def test_nothing_came_up_and_the_next_look_goes_elsewhere():
+    motion = FakeMotion()
+    records, modes, _, _ = run([candidate(0, 0.9), candidate(1, 0.5)], [0, 1], motion)
+    first, second = records
+    assert first.verdict is Verdict.NONE and first.disposition is Disposition.EMPTY
+    assert Mode.RETREAT in modes and Mode.TRANSFER in modes
+    assert motion.planned == [0, 1]  # the same spot is not tried again
+    assert second.rejected[0].kind is FailureKind.REPEAT
+    assert second.disposition is Disposition.DELIVERED
+
+
+def test_fingers_closed_on_nothing_need_no_weighing():
+    records, _, _, times = run([candidate(i, 0.9 - 0.1 * i) for i in range(3)], [],
+                               width=0.0005, recovery=RecoverySettings(max_attempts=2))
+    assert [r.disposition for r in records[:2]] == [Disposition.EMPTY] * 2
+    assert times[Mode.RETREAT] - times[Mode.WEIGH] < 0.05
+
+
+def test_a_doubtful_weighing_is_repeated_and_a_lasting_doubt_is_never_delivered():
+    records, _, _, _ = run([candidate(0, 0.9)], [None, 1])
+    assert records[0].recoveries == [Recovery.REWEIGH]
+    assert records[0].disposition is Disposition.DELIVERED
+    records, _, _, _ = run([candidate(0, 0.9), candidate(1, 0.8)], [None, None, None, 2, 0, 1])
+    assert records[0].recoveries == [Recovery.REWEIGH, Recovery.REWEIGH, Recovery.SHAKE,
+                                     Recovery.PUT_BACK]
+
+
+def test_k_grasps_without_a_delivery_give_up_with_a_clear_record():
+    records, modes, _, _ = run([candidate(i, 0.9 - 0.05 * i) for i in range(6)],
+                               [0] * 6, recovery=RecoverySettings(max_attempts=3), picks=5)
+    assert [r.disposition for r in records[:3]] == [Disposition.EMPTY] * 3
+    last = records[-1]
+    assert len(records) == 4 and last.failure is FailureKind.GAVE_UP
+    assert "3 grasps in a row" in last.reason and modes[-1] is Mode.DONE
+
+
+def test_the_put_back_stops_where_the_load_rests_on_the_pile():
+    _, _, _, free = run([candidate(0, 0.9), candidate(1, 0.8)], [2, 2, 0, 1])
+    _, _, _, resting = run([candidate(0, 0.9), candidate(1, 0.8)], [2, 2, 0, 1],
+                           rest_drop=0.5)
+    # The fake lowering takes ~1.1 s; with the load resting after 0.3 s it opens sooner.
+    assert resting[Mode.OPEN] - resting[Mode.PUT_BACK] < 0.5
+    assert free[Mode.OPEN] - free[Mode.PUT_BACK] > 1.0
+
+
+@pytest.mark.parametrize(("width", "estimate", "verdict"), [
+    (0.0005, PayloadEstimate(ready=True, count=1, trusted=True), Verdict.NONE),
+    (0.003, None, Verdict.UNSURE),
+    (0.003, PayloadEstimate(ready=True, count=1, trusted=False), Verdict.UNSURE),
+    (0.003, PayloadEstimate(ready=True, count=0, trusted=True), Verdict.NONE),
+    (0.003, PayloadEstimate(ready=True, count=1, trusted=True), Verdict.ONE),
+    (0.003, PayloadEstimate(ready=True, count=3, trusted=True), Verdict.SEVERAL),
+])
+def test_judge(width, estimate, verdict):
+    assert judge(width, estimate, 0.0015) is verdict
+
+
+def test_the_rules_never_deliver_a_doubt():
+    settings = RecoverySettings(max_reweighs=1, max_shakes=1)
+    assert after_weighing(Verdict.UNSURE, 0, 0, settings) is Recovery.REWEIGH
+    assert after_weighing(Verdict.UNSURE, 1, 0, settings) is Recovery.SHAKE
+    assert after_weighing(Verdict.UNSURE, 1, 1, settings) is Recovery.PUT_BACK
+    assert after_weighing(Verdict.ONE, 0, 0, settings) is Disposition.DELIVERED
+    assert after_put_back(Verdict.ONE, 0, settings) is Recovery.SHAKE_OFF
+    assert after_put_back(Verdict.ONE, 1, settings) is Disposition.PUT_BACK
+    with pytest.raises(ValueError):
+        RecoverySettings(max_attempts=0)
+
+
+def test_a_simulated_closed_loop_pick_is_weighed_and_delivered_to_the_tray():
+    from dataclasses import replace
+
+    from tangle_drake.pick.diagram import build_pick_diagram, closed_loop_settings
+    from tangle_drake.pick.episode import PickEpisode
+    from tangle_drake.pick.selection import TangleChoice
+    from tangle_drake.pile import settle_pile
+    from tangle_drake.planning.motions import motion_for
+    from tangle_drake.scenario import PartCount
+    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.station import build_station
+
+    scenario = resolve_scenario("floating_gripper.yaml")
+    scenario = replace(scenario, view_cameras=[],
+                       pile=replace(scenario.pile, parts=[PartCount("u_hook", 6)]))
+    station = build_station(scenario)
+    pile = settle_pile(station, scenario, seed=1)
+    pick = build_pick_diagram(scenario, TangleChoice(None, "graspability"),
+                              motion_for(scenario), station=station,
+                              settings=closed_loop_settings(scenario, max_picks=1))
+    episode = PickEpisode(pick)
+    episode.start(pile.state)
+    run = episode.run(60.0)
+    delivered = [r for r in run.records if r.disposition is Disposition.DELIVERED]
+    assert run.end.value == "done" and len(delivered) == 1
+    record = delivered[0]
+    assert record.lifted == 1 and record.estimate.count == 1 and record.estimate.trusted
+    tray = pick.tray.GetOutputPort("tray_count").Eval(
+        pick.tray.GetMyContextFromRoot(episode.simulator.get_context()))
+    assert tray[0] == 1  # the simulation's count, not the estimator's
+    for other in run.records[:-1]:
+        assert other.disposition in (Disposition.EMPTY, Disposition.PUT_BACK)
