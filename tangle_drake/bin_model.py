@@ -58,7 +58,7 @@ def bin_sdf(config: BinConfig, name: str = "bin", stand: bool = True) -> str:
 """
 
 
-RELEASE_ABOVE_RIM = 0.15
+RELEASE_ABOVE_RIM = 0.10
 """The tool centre releases a part this far above the tray's rim, m: the part, hanging up to
 a few centimetres below it, drops in clear of the walls."""
 

@@ -183,7 +183,8 @@ def test_the_demo_picks_one_part_through_the_hardware_interface():
     scenario.pile.parts[0].count = 3
     lines = []
     (record,) = run_demo(DemoOptions(picks=1, scenario=scenario, rule="graspability",
-                                     hardware=True, with_hardware_sim=True), lines.append)
+                                     hardware=True, with_hardware_sim=True, open_loop=True),
+                         lines.append)
     # Whether the fingers catch a wire is physics; what the interface must deliver is a whole
     # pick (no safety stop) whose outcome the controller read from the gripper's measured
     # width alone (the hardware station has no simulation-only ports).
@@ -191,7 +192,23 @@ def test_the_demo_picks_one_part_through_the_hardware_interface():
     assert record.lifted is None
     assert (record.outcome is Outcome.NONE) == (record.width < pick_settings(scenario).empty_width)
     assert any("over memq://" in line for line in lines), lines
-    assert "parts left in the bin" in lines[-1]
+    assert "parts in the bin" in lines[-1]
+
+
+def test_the_closed_loop_weighs_over_lcm_with_the_same_diagram():
+    """The closed loop against the hardware simulator: the wrist sensor's messages are all
+    the controller has to count the parts with."""
+    from tangle_drake.pick.demo import DemoOptions, run_demo
+    from tangle_drake.pick.recovery import Disposition
+
+    scenario = load_scenario(diagrams_dir() / "floating_gripper.yaml")
+    scenario.view_cameras = []
+    scenario.pile.parts[0].count = 4
+    records = run_demo(DemoOptions(picks=1, scenario=scenario, rule="graspability", seed=1,
+                                   hardware=True, with_hardware_sim=True), lambda _: None)
+    assert all(r.lifted is None for r in records)  # no simulation-only count
+    assert records[-1].disposition is Disposition.DELIVERED, [r.describe() for r in records]
+    assert records[-1].estimate.count == 1 and records[-1].outcome.value == "one part"
 
 
 @pytest.mark.parametrize("carrier", ["nextage", "gantry"])

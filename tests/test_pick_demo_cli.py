@@ -6,7 +6,9 @@ import pytest
 from cli_run import run_command
 
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.paths import diagrams_dir
 from tangle_drake.pick import selection
+from tangle_drake.pick.demo import DemoOptions, run_demo
 from tangle_drake.pick.selection import resolve_tangle_choice
 
 run_demo_command = partial(run_command, "demo")
@@ -60,3 +62,13 @@ def test_an_explicit_model_wins(tmp_path):
     model = tmp_path / "mine.pt"
     model.write_bytes(b"weights")
     assert resolve_tangle_choice("c_ring", "cnn", model) == selection.TangleChoice(model, "cnn")
+
+
+def test_the_closed_loop_needs_a_tray_and_says_how_to_pick_without(tmp_path, monkeypatch):
+    monkeypatch.setattr(selection, "TRAINED_DIR", tmp_path)
+    text = (diagrams_dir() / "pick_demo.yaml").read_text()
+    start = text.index("tray:")
+    no_tray = text[:start] + text[text.index("pile:"):]
+    (tmp_path / "no_tray.yaml").write_text(no_tray)
+    with pytest.raises(TangleDrakeError, match=r"needs a 'tray'.*--open-loop"):
+        run_demo(DemoOptions(scenario=tmp_path / "no_tray.yaml"), say=lambda _: None)

@@ -1,4 +1,5 @@
-"""One short pick in simulation through the whole pick diagram, recorded for Meshcat."""
+"""Short demo runs in simulation through the whole pick diagram: one open-loop pick, recorded
+for Meshcat, and a closed-loop run to one delivery into the tray."""
 
 from dataclasses import replace
 
@@ -15,7 +16,7 @@ def test_one_pick_end_to_end(tmp_path):
     lines: list[str] = []
     records = run_demo(DemoOptions(picks=1, scenario=scenario, seed=1,
                                    record=tmp_path / "demo.html",
-                                   diagram=tmp_path / "pick_demo.dot"),
+                                   diagram=tmp_path / "pick_demo.dot", open_loop=True),
                        say=lines.append)
 
     assert len(records) == 1
@@ -28,11 +29,29 @@ def test_one_pick_end_to_end(tmp_path):
     assert 5.0 < record.execution_s < 30.0 and record.planning_s < 5.0
     assert lines[-1].startswith("1 pick(s): ")
     left = 6 - (record.lifted if record.outcome is not Outcome.NONE else 0)
-    assert f"; {left} of 6 parts left in the bin" in lines[-1]  # released outside the bin
+    # Released outside the bin: into the tray, where the last line counts it.
+    assert f"; now {left} of 6 parts in the bin, {6 - left} in the tray" in lines[-1]
     pick_line = next(line for line in lines if line.startswith("pick 1: "))
-    assert pick_line.endswith(f" | {left} of 6 parts in the bin")
+    assert f" | {left} of 6 parts in the bin" in pick_line
 
     assert "<html" in (tmp_path / "demo.html").read_text()[:1000].lower()
     dot = (tmp_path / "pick_demo.dot").read_text()
     for system in ("graspability", "pick_planner", "lift_monitor", "station"):
         assert system in dot
+
+
+def test_the_closed_loop_demo_weighs_and_delivers_one_part_into_the_tray():
+    from tangle_drake.pick.recovery import Disposition
+
+    scenario = resolve_scenario(None)
+    scenario = replace(scenario, view_cameras=[],
+                       pile=replace(scenario.pile, parts=[replace(scenario.pile.parts[0],
+                                                                  count=6)]))
+    lines: list[str] = []
+    records = run_demo(DemoOptions(picks=1, scenario=scenario, seed=1, rule="graspability"),
+                       say=lines.append)
+    delivered = [r for r in records if r.disposition is Disposition.DELIVERED]
+    assert len(delivered) == 1 and delivered[0].estimate.count == 1
+    assert delivered[0].lifted == 1  # the simulation agrees with the scale
+    assert all(r.estimate is not None or r.disposition is Disposition.EMPTY for r in records)
+    assert "1 in the tray" in lines[-1] and "delivered" in lines[-1]

@@ -173,9 +173,9 @@ def test_non_editable_install_finds_models_and_scenarios(tmp_path):
 
 def test_a_tray_must_stand_beside_the_bin_out_of_the_cameras_view():
     base = (diagrams_dir() / "floating_gripper.yaml").read_text()
-    over = base.replace("center: [0.03, 0.22]", "center: [0.34, 0.22]")
+    over = base.replace("center: [-0.01, 0.22]", "center: [0.34, 0.22]")
     with pytest.raises(TangleDrakeError, match="'tray' must stand beside the bin"):
         parse_scenario(over)
-    in_view = parse_scenario(base.replace("center: [0.03, 0.22]", "center: [0.14, 0.50]"))
+    in_view = parse_scenario(base.replace("center: [-0.01, 0.22]", "center: [0.14, 0.50]"))
     with pytest.raises(TangleDrakeError, match="tray shows in the top camera's view"):
         build_station(in_view)

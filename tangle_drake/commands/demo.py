@@ -15,8 +15,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "demo", help="pick parts from a simulated pile with the Nextage, one at a time",
         description="Drop a pile in the simulated station, then run the whole pick diagram "
                     "(top camera, graspability index, tangle CNN, pick planner, Nextage arm "
-                    "and gripper) until --picks picks are done, printing each pick's outcome "
-                    "(one part, several, none, or why it failed) and timings. Uses "
+                    "and gripper, wrist force sensor) until --picks parts are delivered to the "
+                    "tray, each lift weighed and what is not one part shaken or put back; "
+                    "printing each grasp's outcome (one part, several, none, or why it "
+                    "failed), its weighing and timings. Uses "
                     "tangle_drake/trained/<part>.pt with the harmonic rule where it exists; "
                     "otherwise the graspability index alone, with a notice.")
     parser.add_argument("--picks", type=int, default=5, help="picks to make (default: 5)")
@@ -42,6 +44,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--hardware", action="store_true",
                         help="run the same pick diagram against the robot's LCM driver "
                              "interface on the scenario's bus (see docs/hardware.md)")
+    parser.add_argument("--open-loop", action="store_true",
+                        help="pick as the paper does: one look, one grasp, no weighing; "
+                             "--picks counts grasps (default: closed loop, --picks counts "
+                             "parts delivered to the tray, each weighed on the way)")
     parser.add_argument("--with-hardware-sim", action="store_true",
                         help="with --hardware: run the hardware simulator in this process, "
                              "both sides over memq:// (nothing leaves the process)")
@@ -55,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         picks=args.picks, part=args.part, scenario=args.scenario, seed=args.seed,
         rule=args.rule, model=args.model, meshcat=args.meshcat, record=args.record,
         diagram=args.diagram, hardware=args.hardware,
-        with_hardware_sim=args.with_hardware_sim))
+        with_hardware_sim=args.with_hardware_sim, open_loop=args.open_loop))
     if args.meshcat and sys.stdin.isatty():
         input("Meshcat stays up until you press Enter.")
     return 0

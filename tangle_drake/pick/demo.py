@@ -22,7 +22,12 @@ from tangle_drake.hardware.buses import network_bus_url
 from tangle_drake.hardware.config import IN_PROCESS_URL
 from tangle_drake.hardware.loop import HardwareInTheLoop
 from tangle_drake.parts import load_part
-from tangle_drake.pick.diagram import PickDiagram, build_pick_diagram, pick_settings
+from tangle_drake.pick.diagram import (
+    PickDiagram,
+    build_pick_diagram,
+    closed_loop_settings,
+    pick_settings,
+)
 from tangle_drake.pick.episode import Clock, PickEpisode, PickRun, RunEnd, run_picks
 from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.planner import PickSettings
@@ -39,7 +44,8 @@ RECORD_FPS = 20.0
 (a five-pick replay is ~8 MB instead of ~22 MB)."""
 
 SIM_TIME_PER_PICK = 60.0
-"""Simulated seconds a pick may take before the demo gives up, s (a pick takes ~12 s)."""
+"""Simulated seconds a pick may take before the demo gives up, s (a pick takes ~12 s; closed
+loop, a delivery may take several grasps, each with its weighing: twice this)."""
 
 
 @dataclass(frozen=True)
@@ -60,6 +66,9 @@ class DemoOptions:
     """Pick through the hardware station (the robot's LCM driver messages)."""
     with_hardware_sim: bool = False
     """With ``hardware``: run the hardware simulator in this process, over ``memq://``."""
+    open_loop: bool = False
+    """Pick as the paper does: one look, one grasp, no weighing (``picks`` grasps, not
+    deliveries)."""
 
 
 def with_part(scenario: Scenario, part: str | None) -> Scenario:
@@ -93,8 +102,9 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     if choice.notice:
         say(choice.notice)
     say(f"selection: rule {choice.rule}" + (f", model {choice.model}" if choice.model else ""))
-    settings = pick_settings(scenario, max_picks=options.picks)
     motion = motion_for(scenario)  # before any long work: the scenario must have a robot
+    settings = pick_settings(scenario, max_picks=options.picks) if options.open_loop \
+        else closed_loop_settings(scenario, max_picks=options.picks)
     if options.hardware:
         return _run_hardware(options, scenario, choice, settings, motion, say)
 
@@ -118,16 +128,16 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
 
     if meshcat is not None and options.record:
         meshcat.StartRecording(RECORD_FPS, set_visualizations_while_recording=options.meshcat)
-    in_bin = _bin_count(station, episode.simulator, scenario, scenario.pile.total_count)
-    records = _run(episode.simulator, pick, options.picks, say, in_bin)
+    in_bin = _bin_count(pick, episode.simulator, scenario, scenario.pile.total_count)
+    records = _run(episode.simulator, pick, options.picks, say, in_bin,
+                   closed=settings.recovery is not None)
     if meshcat is not None and options.record:
         meshcat.StopRecording()
         meshcat.PublishRecording()
         Path(options.record).parent.mkdir(parents=True, exist_ok=True)
         Path(options.record).write_text(meshcat.StaticHtml())
         say(f"wrote {options.record}")
-    say(f"{summarize(records)}; {in_bin()} left in the bin; "
-        f"wall time {time.perf_counter() - start:.0f} s")
+    say(f"{summarize(records)}; now {in_bin()}; wall time {time.perf_counter() - start:.0f} s")
     return records
 
 
@@ -150,9 +160,11 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
         say(f"hardware simulator and controller in this process over {IN_PROCESS_URL}; "
             f"set-up {time.perf_counter() - start:.1f} s; picking {options.picks} part(s)")
         robot = loop.robot
-        in_bin = _bin_count(robot.station, robot.simulator, scenario, robot.pile.num_in_bin)
-        records = _run(loop, built[0], options.picks, say, in_bin)
-        say(f"{summarize(records)}; {in_bin()} left in the bin; "
+        in_bin = _bin_count(None, robot.simulator, scenario, robot.pile.num_in_bin,
+                            robot.station)
+        records = _run(loop, built[0], options.picks, say, in_bin,
+                       closed=settings.recovery is not None)
+        say(f"{summarize(records)}; now {in_bin()}; "
             f"wall time {time.perf_counter() - start:.0f} s")
         return records
 
@@ -164,7 +176,7 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
     say(f"waiting for the robot on {url} ...")
     station.initialize(simulator)
     say(f"robot connected; picking {options.picks} part(s)")
-    records = _run(simulator, built[0], options.picks, say)
+    records = _run(simulator, built[0], options.picks, say, closed=settings.recovery is not None)
     say(f"{summarize(records)}; wall time {time.perf_counter() - start:.0f} s")
     return records
 
@@ -175,21 +187,34 @@ def parts_in_bin(station: SimulatedStation, context: Context, scenario: Scenario
     return int(inside_bin(scenario.bin, station.part_poses(context)[:, :3, 3]).sum())
 
 
-def _bin_count(station: SimulatedStation, simulator: Simulator, scenario: Scenario,
-               total: int) -> Callable[[], str]:
-    """Simulation only: "N of M parts" still in the bin at the time it is called."""
-    return lambda: f"{parts_in_bin(station, simulator.get_context(), scenario)} of {total} parts"
+def _bin_count(pick: PickDiagram | None, simulator: Simulator, scenario: Scenario,
+               total: int, station: SimulatedStation | None = None) -> Callable[[], str]:
+    """Simulation only: "N of M parts in the bin" (and, with a tray monitor, "K in the tray")
+    at the time it is called."""
+    station = station if pick is None else pick.station
+
+    def count() -> str:
+        context = simulator.get_context()
+        text = f"{parts_in_bin(station, context, scenario)} of {total} parts in the bin"
+        if pick is not None and pick.tray is not None:
+            tray = pick.tray.GetOutputPort("tray_count").Eval(
+                pick.tray.GetMyContextFromRoot(context))
+            text += f", {int(tray[0])} in the tray"
+        return text
+
+    return count
 
 
 def _run(clock: Clock, pick: PickDiagram, picks: int, say: Callable[[str], None],
-         in_bin: Callable[[], str] | None = None) -> list[PickRecord]:
+         in_bin: Callable[[], str] | None = None, closed: bool = False) -> list[PickRecord]:
     """Run the picks, reporting each as it ends; in simulation with what is left in the bin
     (``in_bin``), so a part that a pick pushed over the wall shows up at that pick."""
-    run: PickRun = run_picks(clock, pick, picks * SIM_TIME_PER_PICK, on_pick=lambda record: say(
-        record.describe() + ("" if in_bin is None else f" | {in_bin()} in the bin")))
+    limit = picks * SIM_TIME_PER_PICK * (2 if closed else 1)
+    run: PickRun = run_picks(clock, pick, limit, on_pick=lambda record: say(
+        record.describe() + ("" if in_bin is None else f" | {in_bin()}")))
     if run.end is RunEnd.STOPPED:
         say(f"safety stop: {run.safety_message}; the arm holds its measured pose. Fix the "
             "cause and run the demo again: it starts from the measured state.")
     elif run.end is RunEnd.TIMEOUT:
-        say(f"stopped: {picks} pick(s) not done after {picks * SIM_TIME_PER_PICK:.0f} s")
+        say(f"stopped: {picks} pick(s) not done after {limit:.0f} s")
     return run.records

@@ -100,7 +100,8 @@ def closed_loop_settings(scenario: Scenario, **overrides) -> PickSettings:
                                      ("a 'tray'", scenario.tray is not None)) if not ok]
     if missing:
         raise TangleDrakeError(f"closed-loop picking needs {' and '.join(missing)} in the "
-                               "scenario (as pick_demo.yaml has); pick open loop without")
+                               "scenario (as pick_demo.yaml has); without, pick open loop "
+                               "(--open-loop)")
     return pick_settings(scenario, **{"recovery": RecoverySettings(), **overrides})
 
 

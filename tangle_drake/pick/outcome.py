@@ -136,7 +136,12 @@ def summarize(records: Sequence[PickRecord]) -> str:
     """One line: how many picks ended how."""
     counts = Counter(record.outcome for record in records)
     parts = [f"{counts[outcome]} {outcome.value}" for outcome in Outcome if counts[outcome]]
-    return f"{len(records)} pick(s): " + (", ".join(parts) if parts else "none")
+    text = f"{len(records)} pick(s): " + (", ".join(parts) if parts else "none")
+    dispositions = Counter(r.disposition for r in records if r.disposition is not None)
+    if dispositions:
+        text += " (" + ", ".join(f"{dispositions[d]} {d.value}" for d in Disposition
+                                 if dispositions[d]) + ")"
+    return text
 
 
 class LiftMonitor(LeafSystem):
@@ -178,15 +183,19 @@ class TrayMonitor(LeafSystem):
     """Simulation only: the number of parts lying in the output tray, from true body poses
     (what a closed-loop run delivered, counted by the simulation, not by the estimator).
 
-    A part counts when its centre is over the tray's floor and below its rim plus ``margin``
-    (one still hanging from the gripper above the tray does not). Input ``body_poses``,
-    output ``tray_count``.
+    A part counts when its centre of mass is within ``reach`` of the tray's floor (a hook's
+    centre of mass lies off its wire, and may be past the walls of a part lying in the tray)
+    and below the rim plus ``margin`` (one still hanging from the gripper does not; one that
+    fell beside the tray lies on the ground, far below). Input ``body_poses``, output
+    ``tray_count``.
     """
 
-    def __init__(self, plant: MultibodyPlant, tray: BinConfig, margin: float = 0.02) -> None:
+    def __init__(self, plant: MultibodyPlant, tray: BinConfig, margin: float = 0.02,
+                 reach: float = 0.05) -> None:
         super().__init__()
         self._parts = [int(body.index()) for body in part_bodies(plant)]
         self._tray = tray
+        self._reach = reach
         self._top = tray.floor_height + tray.wall_height + margin
         self._poses = self.DeclareAbstractInputPort(
             "body_poses", plant.get_body_poses_output_port().Allocate())
@@ -195,7 +204,8 @@ class TrayMonitor(LeafSystem):
     def parts_in_tray(self, context: Context) -> list[int]:
         """Body indices of the parts in the tray now."""
         poses = self._poses.Eval(context)
-        return [i for i in self._parts if inside_bin(self._tray, poses[i].translation())
+        return [i for i in self._parts
+                if inside_bin(self._tray, poses[i].translation(), margin=-self._reach)
                 and poses[i].translation()[2] < self._top]
 
     def _calc_count(self, context: Context, output: BasicVector) -> None:

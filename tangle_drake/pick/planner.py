@@ -189,7 +189,12 @@ class PickPlanner(ClosedLoop, LeafSystem):
             empty = (*s.empty_grasps, self._empty(record)) if record.outcome is Outcome.NONE \
                 else s.empty_grasps
             return self._enter(Mode.TRANSFER, replace(s, record=record, empty_grasps=empty), t)
-        if s.mode is Mode.RELEASE and elapsed >= settings.release_time:
+        # Closed loop, the arm settles over the tray before the fingers open (it lags its
+        # command, and a part let go while it still moves is flung past the tray).
+        settle = settings.close_delay if self._recovery is not None else 0.0
+        if s.mode is Mode.RELEASE and elapsed >= settle and s.width < settings.open_width:
+            return replace(s, width=settings.open_width)
+        if s.mode is Mode.RELEASE and elapsed >= settle + settings.release_time:
             return self._enter(Mode.HOME, s, t)
         if s.mode is Mode.OPEN and elapsed >= settings.release_time:
             return self._enter(Mode.WEIGH_OPEN, s, t)
@@ -222,7 +227,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
             if trajectory is None:
                 return self._enter(FALLBACK[mode], s, t)
             s = replace(s, trajectory=trajectory)
-        if mode in (Mode.RELEASE, Mode.OPEN):
+        if mode is Mode.OPEN or (mode is Mode.RELEASE and self._recovery is None):
             s = replace(s, width=self._settings.open_width)
         if mode is Mode.SETTLE:  # back home: the pick is over
             record = replace(s.record, execution_s=t - s.started)
