@@ -315,3 +315,35 @@ def test_out_must_be_a_directory(tmp_path, capsys):
     out.write_text("")
     assert main(["bench", "--quick", "--out", str(out)]) == 2
     assert "is a file, not a directory" in capsys.readouterr().err
+
+
+# --- clearing whole bins --------------------------------------------------------------------
+
+
+def test_clearing_a_quick_bin_counts_what_landed_in_the_tray(tmp_path, capsys):
+    out = tmp_path / "clear"
+    assert main(["bench", "--clear", "--quick", "--workers", "1", "--out", str(out)]) == 0
+    (trial,) = trials_in(out)
+    (run,) = trial["runs"]
+    assert run["method"] == "graspability" and trial["pile"]["parts"] == 2
+    assert run["delivered"] + run["left_in_bin"] + run["lost"] == trial["pile"]["in_bin"]
+    assert sum(g["landed"] for g in run["grasps"]) == run["delivered"]
+    assert all(g["weighed"] is not None or g["disposition"] in ("EMPTY", None)
+               for g in run["grasps"])  # closed loop: every held lift was weighed
+    summary = json.loads((out / "clear_summary.json").read_text())
+    figures = summary["overall"]["graspability"]
+    assert figures["delivered"] == run["delivered"] and figures["bins"] == 1
+    assert figures["parts_per_hour"] > 0
+    assert "exactly one part" in (out / "clear_report.md").read_text()
+    assert "graspability: delivered" in capsys.readouterr().out
+    # The same command again resumes: nothing to run.
+    assert main(["bench", "--clear", "--quick", "--workers", "1", "--out", str(out)]) == 0
+    assert len(trials_in(out)) == 1
+    with pytest.raises(TangleDrakeError, match="other settings"):  # open loop is another run
+        run_bench(BenchOptions(clear=True, open_loop=True, quick=True, workers=1, out=out,
+                               show_progress=False))
+
+
+def test_open_loop_goes_with_clear():
+    with pytest.raises(TangleDrakeError, match="--open-loop goes with --clear"):
+        plan(replace(QUICK, open_loop=True))

@@ -20,6 +20,8 @@ from pathlib import Path
 from tqdm import tqdm
 
 from tangle_drake import __version__
+from tangle_drake.bench.clear_report import summarize_clearing, write_clear_report
+from tangle_drake.bench.clearing import ClearWorker
 from tangle_drake.bench.methods import DEFAULT_METHODS, Method, file_digest, parse_method
 from tangle_drake.bench.report import summarize_run, write_report
 from tangle_drake.bench.results import ResultStore
@@ -34,7 +36,7 @@ from tangle_drake.bench.trials import (
 )
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, load_part
-from tangle_drake.pick.diagram import default_graspability_params
+from tangle_drake.pick.diagram import closed_loop_settings, default_graspability_params
 from tangle_drake.scenario import parse_scenario
 from tangle_drake.scenario_files import scenario_path
 from tangle_drake.workers import start_workers
@@ -46,6 +48,10 @@ QUICK_METHODS = ("random", "graspability")
 QUICK_TRIALS = 2
 QUICK_PILE_SIZE = 6
 """``--quick``: one part, two methods, two trials, small piles (CI runs it end to end)."""
+CLEAR_METHODS = ("graspability", "harmonic")
+"""``--clear``'s default methods (each bin takes minutes: the index alone and the paper's)."""
+QUICK_CLEAR = {"methods": ("graspability",), "trials": 1, "pile_size": 2}
+"""``--clear --quick``: one bin of two U-hooks, the index alone."""
 
 
 @dataclass(frozen=True)
@@ -64,6 +70,9 @@ class BenchOptions:
     seed: int = 0
     scenario: str | Path | None = None
     quick: bool = False
+    clear: bool = False
+    """Clear whole bins (closed loop unless ``open_loop``) instead of one pick per method."""
+    open_loop: bool = False
     show_progress: bool | None = None
     command: str = "tangle-drake bench"
     """The command line, written into the report."""
@@ -82,8 +91,12 @@ class BenchOutcome:
 def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
     """The run's configuration and trial count, and notices (methods left out for want of a
     model); raises ``TangleDrakeError`` for anything that cannot run."""
+    if options.open_loop and not options.clear:
+        raise TangleDrakeError("--open-loop goes with --clear (the pick benchmark is open "
+                               "loop already)")
+    quick_trials = QUICK_CLEAR["trials"] if options.clear else QUICK_TRIALS
     trials = options.trials if options.trials is not None else (
-        QUICK_TRIALS if options.quick else DEFAULT_TRIALS)
+        quick_trials if options.quick else DEFAULT_TRIALS)
     if trials < 1:
         raise TangleDrakeError(f"--trials must be at least 1, got {trials}")
     if options.workers is not None and options.workers < 1:
@@ -96,8 +109,9 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
         parts.append(PartSpec(part, load_part(part, mesh_scale=scale).name, scale))
     _unique([p.name for p in parts], "part")
     explicit = options.methods is not None
-    methods = [parse_method(m) for m in
-               options.methods or (QUICK_METHODS if options.quick else DEFAULT_METHODS)]
+    default_methods = (QUICK_CLEAR["methods"] if options.quick else CLEAR_METHODS) \
+        if options.clear else (QUICK_METHODS if options.quick else DEFAULT_METHODS)
+    methods = [parse_method(m) for m in options.methods or default_methods]
     _unique([m.name for m in methods], "method")
     notices = []
     per_part: dict[str, tuple[Method, ...]] = {}
@@ -124,8 +138,12 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
         raise TangleDrakeError(
             f"--mode {options.mode} disagrees with --scenario {path}, whose carrier makes it "
             f"{mode} mode: drop --mode, or pass the {MODE_SCENARIOS[options.mode]} scenario")
+    quick_pile = QUICK_CLEAR["pile_size"] if options.clear else QUICK_PILE_SIZE
     config = BenchConfig(text, tuple(parts), per_part, mode, options.seed,
-                         QUICK_PILE_SIZE if options.quick else None)
+                         quick_pile if options.quick else None, options.clear,
+                         options.open_loop)
+    if options.clear and not options.open_loop:
+        closed_loop_settings(parse_scenario(text, source=str(path)))  # a tray, a wrist sensor
     return config, trials, notices
 
 
@@ -150,6 +168,7 @@ def identity(config: BenchConfig) -> dict:
                     for part, methods in config.methods.items()},
         "graspability": {p.name: asdict(default_graspability_params(part_scenario(config, p)))
                          for p in config.parts},
+        **({"clear": {"open_loop": config.open_loop}} if config.clear else {}),
     }
 
 
@@ -177,13 +196,18 @@ def run_bench(options: BenchOptions, say: Callable[[str], None] = print) -> Benc
         notices.append(f"{total - len(done)} of {total} trials not run yet: run the same "
                        "command again to finish")
     methods = list(dict.fromkeys(m.name for ms in config.methods.values() for m in ms))
-    summary = summarize_run(done, names, methods, {
-        "command": options.command, "mode": config.mode, "made_by": f"tangle_drake "
-        f"{__version__}", "date": datetime.date.today().isoformat(), "workers": workers,
-        "elapsed_s": time.perf_counter() - start, "trials_per_part": trials,
-        "new_trials": new, "earlier_trials": len(done) - new,
-        "config": run_identity, "notes": notices})
-    files = write_report(store.directory, done, summary, names, methods)
+    meta = {"command": options.command, "mode": config.mode, "made_by": f"tangle_drake "
+            f"{__version__}", "date": datetime.date.today().isoformat(), "workers": workers,
+            "elapsed_s": time.perf_counter() - start, "trials_per_part": trials,
+            "new_trials": new, "earlier_trials": len(done) - new,
+            "config": run_identity, "notes": notices}
+    if config.clear:
+        summary = summarize_clearing(done, names, methods,
+                                     {**meta, "open_loop": config.open_loop})
+        files = write_clear_report(store.directory, done, summary, names, methods)
+    else:
+        summary = summarize_run(done, names, methods, meta)
+        files = write_report(store.directory, done, summary, names, methods)
     return BenchOutcome(store.directory, summary, files, new, interrupted, notices)
 
 
@@ -196,7 +220,8 @@ def _run_trials(config: BenchConfig, store: ResultStore, todo: list[tuple[int, i
     count = options.workers or (None if options.ray else os.cpu_count() or 1)
     if count is not None:
         count = min(count, len(todo))
-    backend = start_workers(TrialWorker, (config,), count, options.ray)
+    backend = start_workers(ClearWorker if config.clear else TrialWorker, (config,), count,
+                            options.ray)
     progress = tqdm(total=total, initial=total - len(todo), unit="trial", desc="bench",
                     dynamic_ncols=True,
                     disable=None if options.show_progress is None else not options.show_progress)
@@ -221,11 +246,18 @@ def _run_trials(config: BenchConfig, store: ResultStore, todo: list[tuple[int, i
                                            f"{config.seed}) failed: {error}") from error
                 store.add(result)
                 new += 1
-                picks += len(result["picks"])
-                successes += sum(p["result"] == "success" for p in result["picks"])
+                if config.clear:
+                    picks += sum(run["delivered"] for run in result["runs"])
+                    successes += sum(g["landed"] == 1 for run in result["runs"]
+                                     for g in run["grasps"])
+                    postfix = f"{picks} parts delivered, {successes} deliveries of one"
+                else:
+                    picks += len(result["picks"])
+                    successes += sum(p["result"] == "success" for p in result["picks"])
+                    postfix = f"success {100 * successes / max(picks, 1):.0f}% of {picks} " \
+                        "new picks"
                 progress.update(1)
-                progress.set_postfix_str(f"success {100 * successes / max(picks, 1):.0f}% "
-                                         f"of {picks} new picks")
+                progress.set_postfix_str(postfix)
     except KeyboardInterrupt:
         interrupted = True
     finally:

@@ -78,6 +78,10 @@ class BenchConfig:
     seed: int = 0
     pile_size: int | None = None
     """Parts per pile; ``None``: the scenario's count."""
+    clear: bool = False
+    """Clear whole bins (:mod:`.clearing`) instead of one pick per method and pile."""
+    open_loop: bool = False
+    """With ``clear``: the paper's open loop instead of the closed one."""
 
 
 def scenario_mode(scenario: Scenario, source: str) -> str:

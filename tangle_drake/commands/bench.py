@@ -42,6 +42,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of the piles (default 0)")
     add_scenario_argument(parser, "the --mode's: diagrams/floating_gripper.yaml or "
                                   "diagrams/pick_demo.yaml")
+    parser.add_argument("--clear", action="store_true",
+                        help="clear whole bins instead: each method empties the same full "
+                             "piles into the tray, closed loop (weighing every lift), until "
+                             "the bin is empty or it gives up; reports parts delivered, "
+                             "deliveries of exactly one part, several read as one, parts per "
+                             "hour (default methods: graspability harmonic)")
+    parser.add_argument("--open-loop", action="store_true",
+                        help="with --clear: the paper's open loop (one look, one grasp, no "
+                             "weighing), to compare on the same piles")
     parser.add_argument("--quick", action="store_true",
                         help="a quick check (for CI): unless given, u_hook only, random and "
                              "graspability, 2 trials; piles of 6 parts")
@@ -60,6 +69,8 @@ def command_line(args: argparse.Namespace) -> str:
         value = getattr(args, option)
         if value != default:
             words += [f"--{option.replace('_', '-')}", str(value)]
+    words += ["--clear"] if args.clear else []
+    words += ["--open-loop"] if args.open_loop else []
     words += ["--quick"] if args.quick else []
     return shlex.join([*words, "--out", str(args.out)])
 
@@ -71,13 +82,18 @@ def run(args: argparse.Namespace) -> int:
     outcome = run_bench(BenchOptions(
         methods=args.methods, parts=args.parts, mesh_scale=args.mesh_scale, trials=args.trials,
         workers=args.workers, ray=args.ray, out=args.out, mode=args.mode, seed=args.seed,
-        scenario=args.scenario, quick=args.quick,
+        scenario=args.scenario, quick=args.quick, clear=args.clear, open_loop=args.open_loop,
         command=command_line(args)))
-    print(terminal_summary(outcome.summary))
-    timings = outcome.summary["throughput"]
-    if timings["cpu_s_per_pick"] is not None:
-        print(f"{timings['picks']} picks, {timings['cpu_s_per_pick']:.1f} CPU s per pick "
-              "(pile included)")
+    if args.clear:
+        from tangle_drake.bench.clear_report import terminal_clear_summary
+
+        print(terminal_clear_summary(outcome.summary))
+    else:
+        print(terminal_summary(outcome.summary))
+        timings = outcome.summary["throughput"]
+        if timings["cpu_s_per_pick"] is not None:
+            print(f"{timings['picks']} picks, {timings['cpu_s_per_pick']:.1f} CPU s per pick "
+                  "(pile included)")
     for note in outcome.notices:
         print(note)
     print(f"wrote {', '.join(path.name for path in outcome.files)} in {outcome.directory}")

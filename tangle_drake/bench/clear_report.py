@@ -1,0 +1,159 @@
+"""The bin-clearing benchmark's figures and report (``tangle-drake bench --clear``).
+
+Per method and part, and per method over all parts: parts delivered to the tray; deliveries
+(grasps after which parts landed in the tray, counted by the simulation) with exactly one
+part and with several; several read as one (delivered on the estimator's "one part" while
+several came up or landed); grasps per delivered part; shakes and put-backs; parts left in the
+bin and lost (in neither bin nor tray); the share of the bin cleared; delivered parts per hour
+of simulated time plus computation. Rates come with 95 % bootstrap intervals over bins.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+BOOTSTRAP_SAMPLES = 2000
+BOOTSTRAP_SEED = 0
+_FIELDS = ("part", "trial", "method", "index", "outcome", "failure", "lifted", "weighed",
+           "verdict", "recoveries", "disposition", "landed", "execution_s", "compute_s")
+
+
+def _counts(runs: Sequence[dict]) -> dict:
+    """Pooled counts over ``runs`` (one method's clearings of some bins)."""
+    grasps = [g for run in runs for g in run["grasps"]]
+    landed = [g["landed"] for g in grasps if g["landed"] > 0]
+    delivered = sum(run["delivered"] for run in runs)
+    parts = sum(run["delivered"] + run["left_in_bin"] + run["lost"] for run in runs)
+    hours = sum(run["sim_s"] + run["compute_s"] for run in runs) / 3600
+    return {
+        "bins": len(runs), "parts": parts, "delivered": delivered,
+        "deliveries": len(landed), "exactly_one": sum(n == 1 for n in landed),
+        "several": sum(n >= 2 for n in landed),
+        "several_read_as_one": sum(g["disposition"] == "DELIVERED" and (
+            g["landed"] >= 2 or (g["lifted"] or 0) >= 2) for g in grasps),
+        "grasps": len(grasps),
+        "shakes": sum(r in ("SHAKE", "SHAKE_OFF") for g in grasps for r in g["recoveries"]),
+        "put_backs": sum(g["disposition"] == "PUT_BACK" for g in grasps),
+        "empty": sum(g["disposition"] == "EMPTY" or g["outcome"] == "NONE" for g in grasps),
+        "gave_up": sum(g["failure"] == "gave up" for g in grasps),
+        "left_in_bin": sum(run["left_in_bin"] for run in runs),
+        "lost": sum(run["lost"] for run in runs), "hours": hours,
+    }
+
+
+def _rates(c: dict) -> dict:
+    return {"exactly_one_rate": c["exactly_one"] / c["deliveries"] if c["deliveries"] else None,
+            "several_rate": c["several"] / c["deliveries"] if c["deliveries"] else None,
+            "cleared": c["delivered"] / c["parts"] if c["parts"] else None,
+            "grasps_per_part": c["grasps"] / c["delivered"] if c["delivered"] else None,
+            "parts_per_hour": c["delivered"] / c["hours"] if c["hours"] else None}
+
+
+def _interval(runs: Sequence[dict], key: str) -> list[float] | None:
+    """95 % bootstrap interval of a pooled rate, resampling whole bins."""
+    if not runs:
+        return None
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    values = []
+    for _ in range(BOOTSTRAP_SAMPLES):
+        sample = [runs[i] for i in rng.integers(len(runs), size=len(runs))]
+        value = _rates(_counts(sample))[key]
+        if value is not None:
+            values.append(value)
+    return [float(np.percentile(values, 2.5)), float(np.percentile(values, 97.5))] \
+        if values else None
+
+
+def figures(runs: Sequence[dict]) -> dict:
+    """Counts, rates and intervals of one method's clearings."""
+    counts = _counts(runs)
+    intervals = {f"{key}_ci": _interval(runs, key)
+                 for key in ("exactly_one_rate", "several_rate", "cleared", "parts_per_hour")}
+    return {**counts, **_rates(counts), **intervals}
+
+
+def summarize_clearing(trials: Sequence[dict], parts: Sequence[str], methods: Sequence[str],
+                       meta: dict) -> dict:
+    """The run's figures per method (over all parts) and per method and part."""
+    def runs_of(method: str, part: str | None = None) -> list[dict]:
+        return [run for trial in trials if part in (None, trial["part"])
+                for run in trial["runs"] if run["method"] == method]
+
+    return {**meta, "overall": {m: figures(runs_of(m)) for m in methods},
+            "by_part": {p: {m: figures(runs_of(m, p)) for m in methods} for p in parts}}
+
+
+def _pct(value: float | None, interval: list[float] | None = None) -> str:
+    if value is None:
+        return "–"
+    text = f"{100 * value:.1f} %"
+    return text + (f" [{100 * interval[0]:.1f}, {100 * interval[1]:.1f}]" if interval else "")
+
+
+def _row(name: str, f: dict) -> str:
+    pph = "–" if f["parts_per_hour"] is None else (
+        f"{f['parts_per_hour']:.0f}" + (f" [{f['parts_per_hour_ci'][0]:.0f}, "
+                                        f"{f['parts_per_hour_ci'][1]:.0f}]"
+                                        if f["parts_per_hour_ci"] else ""))
+    gpp = "–" if f["grasps_per_part"] is None else f"{f['grasps_per_part']:.2f}"
+    return (f"| {name} | {f['bins']} | {f['delivered']}/{f['parts']} "
+            f"({_pct(f['cleared'])}) | {f['deliveries']} | "
+            f"{_pct(f['exactly_one_rate'], f['exactly_one_rate_ci'])} | {f['several']} | "
+            f"{f['several_read_as_one']} | {gpp} | {f['shakes']} | {f['put_backs']} | "
+            f"{f['left_in_bin']} | {f['lost']} | {pph} |")
+
+
+_HEADER = ["| method | bins | delivered / parts (cleared) | deliveries | exactly one part "
+           "[95 % CI] | several | several read as one | grasps per part | shakes | "
+           "put-backs | left in bin | lost | parts per hour [95 % CI] |",
+           "|---" * 13 + "|"]
+
+
+def write_clear_report(directory: Path, trials: Sequence[dict], summary: dict,
+                       parts: Sequence[str], methods: Sequence[str]) -> list[Path]:
+    """``clear_report.md``, ``clear_summary.json`` and ``clear_grasps.csv`` in ``directory``."""
+    loop = "open loop (the paper's)" if summary.get("open_loop") else "closed loop"
+    lines = [f"# Bin clearing ({summary['mode']} mode, {loop})", "",
+             f"Made by `{summary['command']}` ({summary['made_by']}, {summary['date']}).", "",
+             "Deliveries and their part counts are the simulation's (what landed in the tray);"
+             " parts per hour count simulated time plus the computation's wall time.", "",
+             "## All parts", "", *_HEADER,
+             *[_row(m, summary["overall"][m]) for m in methods]]
+    for part in parts:
+        lines += ["", f"## {part}", "", *_HEADER,
+                  *[_row(m, summary["by_part"][part][m]) for m in methods]]
+    for note in summary.get("notes", []):
+        lines += ["", f"Note: {note}"]
+    report = directory / "clear_report.md"
+    report.write_text("\n".join(lines) + "\n")
+    summary_path = directory / "clear_summary.json"
+    summary_path.write_text(json.dumps(summary, indent=2, sort_keys=True) + "\n")
+    grasps = directory / "clear_grasps.csv"
+    with grasps.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=_FIELDS, extrasaction="ignore")
+        writer.writeheader()
+        for trial in trials:
+            for run in trial["runs"]:
+                for g in run["grasps"]:
+                    writer.writerow({**g, "part": trial["part"], "trial": trial["trial"],
+                                     "method": run["method"],
+                                     "recoveries": " ".join(g["recoveries"])})
+    return [report, summary_path, grasps]
+
+
+def terminal_clear_summary(summary: dict) -> str:
+    """A few lines for the terminal: each method's figures over all parts."""
+    out = []
+    for method, f in summary["overall"].items():
+        out.append(f"{method}: delivered {f['delivered']}/{f['parts']} parts, exactly one in "
+                   f"{_pct(f['exactly_one_rate'], f['exactly_one_rate_ci'])} of "
+                   f"{f['deliveries']} deliveries, {f['several_read_as_one']} several read as "
+                   f"one, {f['lost']} lost, "
+                   + ("–" if f["parts_per_hour"] is None else f"{f['parts_per_hour']:.0f}")
+                   + " parts per hour")
+    return "\n".join(out)

@@ -1,0 +1,134 @@
+"""Bin clearing: each method empties the same full pile into the tray, as a factory would.
+
+A bin is (part, trial index), its pile seed the same as the pick benchmark's trial of that
+index, so every method clears the same piles. Each method runs closed loop (weigh, shake, put
+back; ``--open-loop``: the paper's one look, one grasp) from the full settled pile until the
+planner is done: the bin is empty, nothing can be picked, or ``max_attempts`` grasps in a row
+delivered nothing. Every grasp is recorded with what the simulation saw land in the tray (the
+tray's count before and after it, not the estimator's word), so deliveries of several parts,
+and several read as one, are counted by the truth.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+from pydrake.systems.framework import Context
+
+from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
+from tangle_drake.bench.trials import BenchConfig, PartSpec, method_seed, part_scenario, pile_seed
+from tangle_drake.bin_model import inside_bin
+from tangle_drake.pick.diagram import build_pick_diagram, closed_loop_settings, pick_settings
+from tangle_drake.pick.episode import PickEpisode
+from tangle_drake.pick.outcome import PickRecord
+from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
+from tangle_drake.pile import PileSettler
+from tangle_drake.planning.motions import motion_for
+from tangle_drake.station import build_station, camera_model
+
+SIM_TIME_PER_PART = 40.0
+"""Simulated seconds allowed per part in the pile before a clearing is stopped, s."""
+
+
+@dataclass
+class _Rig:
+    settler: PileSettler
+    episode: PickEpisode
+    scenario: Any
+    methods: dict[str, Method] = field(default_factory=dict)
+
+
+class ClearWorker:
+    """Clears bins (``(part index, trial index)``) for a :class:`BenchConfig` with ``clear``
+    set; keeps each part's rig once built."""
+
+    def __init__(self, config: BenchConfig) -> None:
+        self.config = config
+        self._rigs: dict[str, _Rig] = {}
+        if any(m.needs_model for methods in config.methods.values() for m in methods):
+            import torch
+
+            torch.set_num_threads(1)  # one worker, one core (see TrialWorker)
+
+    def run_task(self, task: tuple[int, int]) -> dict:
+        part_index, trial = task
+        spec = self.config.parts[part_index]
+        start, cpu = time.perf_counter(), time.process_time()
+        rig = self._rig_for(spec)
+        seed = pile_seed(self.config.seed, spec.name, trial)
+        settled = rig.settler.settle(seed)
+        pile = {"seed": seed, "parts": settled.report.num_parts,
+                "in_bin": settled.report.num_in_bin,
+                "digest": hashlib.sha256(settled.state.tobytes()).hexdigest()[:16]}
+        random_seed = method_seed(self.config.seed, spec.name, trial)
+        runs = [self._clear(rig, settled.state, MethodRun(name, random_seed), pile["in_bin"])
+                for name in rig.methods]
+        return {"part": spec.name, "trial": trial, "pile": pile, "runs": runs,
+                "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
+
+    def _rig_for(self, spec: PartSpec) -> _Rig:
+        if spec.name not in self._rigs:
+            scenario = part_scenario(self.config, spec)
+            methods = self.config.methods[spec.name]
+            count = scenario.pile.total_count
+            settings = pick_settings(scenario, max_picks=2 * count) if self.config.open_loop \
+                else closed_loop_settings(scenario, max_picks=count)
+            pick = build_pick_diagram(
+                scenario, TangleChoice(None, FALLBACK_RULE), motion_for(scenario),
+                station=build_station(scenario), settings=settings,
+                selection=selection_wiring(methods, spec.name,
+                                           camera_model(scenario).intrinsics))
+            self._rigs[spec.name] = _Rig(PileSettler(build_station(scenario), scenario),
+                                         PickEpisode(pick), scenario,
+                                         {m.name: m for m in methods})
+        return self._rigs[spec.name]
+
+    def _clear(self, rig: _Rig, state, run: MethodRun, in_bin: int) -> dict:
+        start, cpu = time.perf_counter(), time.process_time()
+        episode = rig.episode
+        pick = episode.pick
+        episode.start(state, lambda context: pick.diagram.GetInputPort("method").FixValue(
+            context, run))
+        rows: list[dict] = []
+        tray = [0]
+
+        def tray_count(context: Context) -> int:
+            return round(pick.tray.GetOutputPort("tray_count").Eval(
+                pick.tray.GetMyContextFromRoot(context))[0])
+
+        def grasp(record: PickRecord) -> None:
+            now = tray_count(episode.simulator.get_context())
+            rows.append(grasp_row(record, now - tray[0]))
+            tray[0] = now
+
+        result = episode.run(SIM_TIME_PER_PART * max(in_bin, 1), on_pick=grasp)
+        # Parts still falling into the tray after the last grasp was recorded come to rest.
+        episode.simulator.AdvanceTo(episode.simulator.get_context().get_time() + 1.0)
+        context = episode.simulator.get_context()
+        final = tray_count(context)
+        if rows:  # what landed after the last record belongs to it
+            rows[-1]["landed"] += final - tray[0]
+        positions = pick.station.part_poses(context)[:, :3, 3]
+        left = int(inside_bin(rig.scenario.bin, positions).sum())
+        return {"method": run.name, "end": result.end.value, "sim_s": round(result.time, 3),
+                "compute_s": sum(r["compute_s"] for r in rows), "grasps": rows,
+                "delivered": final, "left_in_bin": left, "lost": in_bin - left - final,
+                "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
+
+
+def grasp_row(record: PickRecord, landed: int) -> dict:
+    """One grasp of a clearing as plain data: what it did, and what landed in the tray."""
+    return {"index": record.index, "outcome": record.outcome.name,
+            "failure": None if record.failure is None else record.failure.value,
+            "lifted": record.lifted,
+            "weighed": None if record.estimate is None or not record.estimate.ready
+            else round(record.estimate.parts, 3),
+            "verdict": None if record.verdict is None else record.verdict.name,
+            "recoveries": [r.name for r in record.recoveries],
+            "disposition": None if record.disposition is None else record.disposition.name,
+            "landed": landed, "execution_s": round(record.execution_s, 3),
+            "compute_s": record.perception_s + record.cnn_s + record.planning_s}
+
