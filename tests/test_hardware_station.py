@@ -4,6 +4,7 @@ before status, malformed messages refused without stopping the diagram, both dep
 import numpy as np
 import pytest
 from drake import (
+    lcmt_force_torque,
     lcmt_iiwa_command,
     lcmt_iiwa_status,
     lcmt_image,
@@ -17,6 +18,7 @@ from pydrake.systems.framework import PortDataType
 from pydrake.systems.lcm import LcmBuses
 
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.hardware.safety import Mode
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.robot import HOME
 from tangle_drake.scenario import load_scenario, parse_scenario
@@ -85,19 +87,21 @@ class Bus:
         for channel, messages in self.commands.items():
             self.lcm.Subscribe(channel, messages.append)
 
-    def publish_status(self, q=HOME, width=0.03) -> None:
-        status = lcmt_iiwa_status()
-        status.utime = int(self.time * 1e6)
-        status.num_joints = 15
+    def publish_status(self, q=HOME, width=0.03, wrist: bool = True) -> None:
+        status = _status(self, self.time)
         status.joint_position_measured = list(q)
-        for name in ("joint_velocity_estimated", "joint_position_commanded",
-                     "joint_position_ipo", "joint_torque_measured", "joint_torque_commanded",
-                     "joint_torque_external"):
-            setattr(status, name, [0.0] * 15)
         self.lcm.Publish("NEXTAGE_STATUS", status.encode())
+        self.publish_gripper_and_wrist(width, wrist)
+
+    def publish_gripper_and_wrist(self, width: float = 0.03, wrist: bool = True) -> None:
         wsg = lcmt_schunk_wsg_status()
+        wsg.utime = int(self.time * 1e6)
         wsg.actual_position_mm = width * 1e3
         self.lcm.Publish("WSG_STATUS", wsg.encode())
+        if wrist:
+            wrench = lcmt_force_torque()
+            wrench.timestamp, wrench.fz = int(self.time * 1e6), 4.2
+            self.lcm.Publish("WRIST_FORCE_TORQUE", wrench.encode())
 
     @property
     def time(self) -> float:
@@ -154,7 +158,7 @@ def test_malformed_status_is_refused_and_reported_while_the_station_runs_on(capl
     bus.simulator.AdvanceTo(bus.time + 0.010)  # the report counts at the next command tick
 
     np.testing.assert_allclose(bus.out("nextage.position_measured"), q)
-    assert bus.out("safety.report").rejected == (4, 1)
+    assert bus.out("safety.report").rejected == (4, 1, 0)
     for reason in ("does not decode as lcmt_iiwa_status", "num_joints is 7, expected 15",
                    "joint_position_measured has non-finite values",
                    "rejected message 1 on DRAKE_RGBD_CAMERA_IMAGES_camera",
@@ -223,3 +227,49 @@ hardware: {depth_format: 16U, status_timeout: 0.05}
                         ("hardware: {status_timeot: 0.2}", "hardware.status_timeot")]:
         with pytest.raises(TangleDrakeError, match=f"'{field}'"):
             parse_scenario(text)
+
+
+def test_freshness_is_by_timestamp_a_frozen_or_late_status_is_not_fresh(caplog):
+    bus = Bus()
+    bus.advance(0.05)
+    assert bus.out("safety.ready")[0] == 1
+    # A few lost messages in a row are tolerated...
+    bus.advance(0.04, status=False)
+    bus.advance(0.02)
+    assert bus.out("safety.report").mode is Mode.RUNNING
+    # ...an out-of-order status is refused, a repeated one dropped...
+    frozen = bus.time
+    late = lcmt_iiwa_status.decode(_status(bus, frozen - 0.02).encode())
+    bus.lcm.Publish("NEXTAGE_STATUS", late.encode())
+    bus.simulator.AdvanceTo(bus.time + 0.005)
+    assert "out of order" in caplog.text
+    # ...and a driver that re-sends a frozen status stops the robot as a silent one does.
+    while bus.out("safety.report").mode is Mode.RUNNING:
+        bus.lcm.Publish("NEXTAGE_STATUS", _status(bus, frozen).encode())
+        bus.publish_gripper_and_wrist()
+        bus.simulator.AdvanceTo(bus.time + 0.005)
+        assert bus.time - frozen < 0.2
+    assert "no valid NEXTAGE_STATUS" in bus.out("safety.report").message
+
+
+def test_a_silent_wrist_sensor_stops_the_robot():
+    bus = Bus()
+    bus.advance(0.05)
+    start = bus.time
+    while bus.out("safety.report").mode is Mode.RUNNING:
+        bus.publish_status(wrist=False)
+        bus.simulator.AdvanceTo(bus.time + 0.005)
+        assert bus.time - start < 0.2
+    assert "no valid WRIST_FORCE_TORQUE" in bus.out("safety.report").message
+    assert bus.out("safety.fault")[0] == 1
+
+
+def _status(bus, at: float) -> lcmt_iiwa_status:
+    status = lcmt_iiwa_status()
+    status.utime = int(at * 1e6)
+    status.num_joints = 15
+    status.joint_position_measured = list(HOME)
+    for name in ("joint_velocity_estimated", "joint_position_commanded", "joint_position_ipo",
+                 "joint_torque_measured", "joint_torque_commanded", "joint_torque_external"):
+        setattr(status, name, [0.0] * 15)
+    return status

@@ -44,10 +44,19 @@ class HardwareConfig:
     startup_timeout: float = 5.0
     """Wall-clock seconds the controller waits at start for the first status and image
     (``HardwareStation.initialize``)."""
+    tracking_tolerance: float = 0.03
+    """A joint may trail its command by this much (rad or m) at any speed..."""
+    tracking_lag: float = 0.1
+    """...or by its commanded speed times this, s (the servos' lag)..."""
+    tracking_time: float = 0.2
+    """...and by more for at most this long, s, before the arm is held (it is blocked, or
+    the driver does not follow). Measured on the hardware simulator: the scripted move and the
+    picks stay within 0.02 rad of these bounds (tests/test_hardware_loop.py)."""
 
     def validate(self, where: str) -> None:
         """Refuse values the station cannot run with, naming the field."""
-        for name in ("command_period", "status_period", "camera_period", "status_timeout"):
+        for name in ("command_period", "status_period", "camera_period", "status_timeout",
+                     "tracking_tolerance", "tracking_lag", "tracking_time"):
             if not getattr(self, name) > 0:
                 raise TangleDrakeError(f"scenario field '{where}.{name}' must be positive")
         if self.startup_timeout < 0:

@@ -4,6 +4,12 @@ Drake's receivers trust their input: an ``lcmt_iiwa_status`` with the wrong join
 inside the simulator, and bytes that do not decode abort the whole process. A cable glitch or a
 misconfigured driver must not do either, so every subscriber here decodes in Python first,
 checks the message, and keeps the last good one; a bad one is counted, logged and dropped.
+
+Status, images and sensor readings are also checked by their timestamp (one mechanism for
+every such channel, :data:`STAMPS`): a message must be newer than the last one accepted. An
+older one (out of order) is refused; one with the same stamp (a driver re-sending a frozen
+status) is counted as a repeat and does not count as fresh, so the safety supervisor's
+freshness rule sees through it.
 """
 
 from __future__ import annotations
@@ -38,16 +44,29 @@ DEPTH_DTYPES = {lcmt_image.CHANNEL_TYPE_FLOAT32: "<f4", lcmt_image.CHANNEL_TYPE_
 """Depth channel types the station reads: 32F metres or 16U millimetres, little-endian."""
 
 
+STAMPS: dict[type, Callable[[object], int]] = {
+    lcmt_iiwa_status: lambda message: message.utime,
+    lcmt_schunk_wsg_status: lambda message: message.utime,
+    lcmt_image_array: lambda message: message.header.utime,
+    lcmt_force_torque: lambda message: message.timestamp,
+}
+"""The timestamp (µs, the sender's clock) of every message kind checked for freshness."""
+
+
 @dataclass(frozen=True)
 class Received:
     """What one subscriber has taken from its channel so far."""
 
     valid: int = 0
-    """Messages accepted."""
+    """Messages accepted (each newer than the one before, where the kind has a stamp)."""
     rejected: int = 0
-    """Messages refused (undecodable, wrong sizes, non-finite values, ...)."""
+    """Messages refused (undecodable, wrong sizes, non-finite values, out of order, ...)."""
+    repeated: int = 0
+    """Messages that repeated the last accepted one's stamp: dropped, and not fresh."""
     data: bytes = b""
     """The last accepted message, encoded; empty before the first."""
+    stamp: int | None = None
+    """The last accepted message's timestamp, µs."""
     last_error: str = ""
     """Why the last refused message was refused."""
 
@@ -72,8 +91,17 @@ class ValidatingSerializer(SerializerInterface):
         previous: Received = abstract_value.get_value()
         data = bytes(buffer)
         encoded, error = decode_and_check(self._lcm_type, data, self._check)
+        stamp = None
+        if error is None and self._lcm_type in STAMPS:
+            stamp = int(STAMPS[self._lcm_type](self._lcm_type.decode(encoded)))
+            if previous.stamp is not None and stamp == previous.stamp:
+                abstract_value.set_value(replace(previous, repeated=previous.repeated + 1))
+                return
+            if previous.stamp is not None and stamp < previous.stamp:
+                error = f"out of order: stamp {stamp} µs after {previous.stamp} µs"
         if error is None:
-            abstract_value.set_value(replace(previous, valid=previous.valid + 1, data=encoded))
+            abstract_value.set_value(replace(previous, valid=previous.valid + 1, data=encoded,
+                                             stamp=stamp))
             return
         rejected = previous.rejected + 1
         # Log the first of a kind and then sparsely, so a misconfigured driver at 200 Hz

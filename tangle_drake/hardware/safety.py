@@ -47,10 +47,11 @@ class SafetyReport:
     mode: Mode = Mode.WAITING
     message: str = ""
     """Why it stopped; empty unless ``mode`` is FAULT."""
-    status_age: tuple[float, float] = (math.inf, math.inf)
-    """Seconds since the last valid arm and gripper status."""
-    rejected: tuple[int, int] = (0, 0)
-    """Malformed arm and gripper status messages refused so far."""
+    status_age: tuple[float, ...] = (math.inf, math.inf)
+    """Seconds since the last fresh message of each status channel (arm, gripper, then the
+    sensors), in the supervisor's ``status`` order."""
+    rejected: tuple[int, ...] = (0, 0)
+    """Messages refused so far on each status channel."""
 
 
 @dataclass(frozen=True)
@@ -58,44 +59,50 @@ class _State:
     report: SafetyReport = SafetyReport()
     arm_command: np.ndarray = field(default_factory=lambda: np.zeros(0))
     gripper_command: float = 0.0
-    seen: tuple[int, int] = (0, 0)
-    """Valid arm and gripper status counts at the last tick."""
-    fresh_at: tuple[float, float] = (-math.inf, -math.inf)
+    seen: tuple[int, ...] = (0, 0)
+    """Fresh message counts of each status channel at the last tick."""
+    fresh_at: tuple[float, ...] = (-math.inf, -math.inf)
     """Times the counts last changed."""
     reset_input: float = 0.0
+    lagging_since: float | None = None
+    """Since when the arm has trailed its command by more than the tracking bound, s."""
 
 
 class SafetySupervisor(LeafSystem):
     """Checks every command against fresh status and the robot's limits, at the command rate.
 
-    The arm is the gripper's carrier, with ``len(limits.joint_names)`` joints; ``channels``
-    names its status channel and the gripper's, for messages.
+    The arm is the gripper's carrier, with ``len(limits.joint_names)`` joints. ``status`` maps
+    each status input's name to its channel: ``arm`` and ``gripper`` first, then any sensor
+    that must stay fresh (``wrist``); each is an input ``{name}_status``.
 
     Inputs: ``position_desired`` (n), ``gripper_desired`` (1), ``position_measured`` (n),
-    ``gripper_measured`` ([width, rate]), ``arm_status`` and ``gripper_status``
-    (:class:`Received` records), ``reset`` (optional, 1). Outputs: ``position_command``,
+    ``gripper_measured`` ([width, rate]), ``{name}_status`` (:class:`Received` records),
+    ``reset`` (optional, 1). Outputs: ``position_command``,
     ``gripper_command``, ``send`` (1 while commands may go out), ``fault``, ``ready`` (1 while
     commands pass through) and ``report`` (:class:`SafetyReport`).
     """
 
     def __init__(self, limits: RobotLimits, config: HardwareConfig,
-                 channels: tuple[str, str]) -> None:
+                 status: dict[str, str]) -> None:
         super().__init__()
         n = len(limits.joint_names)
         self._limits = limits
+        self._config = config
         self._period = config.command_period
         self._timeout = config.status_timeout
-        self._channels = channels
+        self._channels = tuple(status.values())
         self._desired = self.DeclareVectorInputPort("position_desired", n)
         self._gripper_desired = self.DeclareVectorInputPort("gripper_desired", 1)
         self._measured = self.DeclareVectorInputPort("position_measured", n)
         self._gripper_measured = self.DeclareVectorInputPort("gripper_measured", 2)
-        self._status = (
-            self.DeclareAbstractInputPort("arm_status", AbstractValue.Make(Received())),
-            self.DeclareAbstractInputPort("gripper_status", AbstractValue.Make(Received())))
+        self._status = tuple(
+            self.DeclareAbstractInputPort(f"{name}_status", AbstractValue.Make(Received()))
+            for name in status)
         self._reset = self.DeclareVectorInputPort("reset", 1)
+        k = len(status)
         self._state = self.DeclareAbstractState(AbstractValue.Make(_State(
-            arm_command=np.zeros(n))))
+            report=SafetyReport(status_age=(math.inf,) * k, rejected=(0,) * k),
+            arm_command=np.zeros(n), seen=(0,) * k, fresh_at=(-math.inf,) * k)))
         self.DeclarePeriodicUnrestrictedUpdateEvent(self._period, 0.0, self._update)
 
         ticket = {self.all_state_ticket()}
@@ -151,8 +158,9 @@ class SafetySupervisor(LeafSystem):
                               report=replace(new.report, mode=Mode.RUNNING))
         elif mode is Mode.RUNNING:
             q, width = self._desired_commands(context, old)
+            lagging, new = self._tracking(new, old, q, q_measured, t)
             problem = self._stale(ages) or self._arm_problem(q, old.arm_command) or \
-                self._gripper_problem(width)
+                self._gripper_problem(width) or lagging
             if problem:
                 log.error("safety stop at t=%.3f s: %s; holding the measured pose, the pick "
                           "sequence must stop", t, problem)
@@ -161,6 +169,26 @@ class SafetySupervisor(LeafSystem):
             else:
                 new = replace(new, arm_command=q, gripper_command=width)
         state.get_mutable_abstract_state(self._state).set_value(new)
+
+    def _tracking(self, new: _State, old: _State, q: np.ndarray, q_measured: np.ndarray,
+                  t: float) -> tuple[str | None, _State]:
+        """A problem if the arm has trailed its last command by more than
+        max(``tracking_tolerance``, speed x ``tracking_lag``) on some joint for longer than
+        ``tracking_time``: the normal servo lag never is (a blocked or dropped arm is)."""
+        config = self._config
+        speed = np.abs(q - old.arm_command) / self._period
+        error = np.abs(old.arm_command - q_measured)
+        bound = np.maximum(config.tracking_tolerance, speed * config.tracking_lag)
+        over = error > bound
+        if not over.any():
+            return None, replace(new, lagging_since=None)
+        since = t if old.lagging_since is None else old.lagging_since
+        new = replace(new, lagging_since=since)
+        if t - since < config.tracking_time:
+            return None, new
+        j = int(np.argmax(error - bound))
+        return (f"{self._limits.joint_names[j]} trails its command by {error[j]:.4f} "
+                f"{self._limits.units[j]} for {t - since:.2f} s (bound {bound[j]:.4f})"), new
 
     def _desired_commands(self, context: Context, old: _State) -> tuple[np.ndarray, float]:
         """The planner's commands; an unconnected input holds the last command."""

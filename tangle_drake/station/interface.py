@@ -99,8 +99,14 @@ def build_hardware_station(scenario: Scenario,
         builder, buses.find(arm_config.lcm_bus), arm_name, arm_config, n)
     hand_status, hand = parallel_jaw.add_status(
         builder, buses.find(hand_config.lcm_bus), hand_name, hand_config)
+    sensors = {name: force_torque.add_interface(builder, buses.find(sensor.lcm_bus), name,
+                                                sensor)
+               for name, sensor in scenario.force_torque_sensors.items()}
     supervisor = builder.AddNamedSystem("safety", SafetySupervisor(
-        limits, scenario.hardware, (arm_config.status_channel, hand_config.status_channel)))
+        limits, scenario.hardware, {"arm": arm_config.status_channel,
+                                    "gripper": hand_config.status_channel,
+                                    **{name: scenario.force_torque_sensors[name].channel
+                                       for name in sensors}}))
     builder.ExportInput(supervisor.GetInputPort("position_desired"), f"{arm_name}.position")
     builder.ExportInput(supervisor.GetInputPort("gripper_desired"), f"{hand_name}.position")
     builder.ExportInput(supervisor.GetInputPort("reset"), "safety.reset")
@@ -109,6 +115,8 @@ def build_hardware_station(scenario: Scenario,
     builder.Connect(hand.get_state_output_port(), supervisor.GetInputPort("gripper_measured"))
     builder.Connect(arm_status.get_output_port(), supervisor.GetInputPort("arm_status"))
     builder.Connect(hand_status.get_output_port(), supervisor.GetInputPort("gripper_status"))
+    for name, subscriber in sensors.items():  # a stale sensor stops the robot as status does
+        builder.Connect(subscriber.get_output_port(), supervisor.GetInputPort(f"{name}_status"))
     for name in ("fault", "ready", "report"):
         builder.ExportOutput(supervisor.GetOutputPort(name), f"safety.{name}")
     send = supervisor.GetOutputPort("send")
@@ -118,8 +126,6 @@ def build_hardware_station(scenario: Scenario,
     parallel_jaw.add_command(builder, buses.find(hand_config.lcm_bus), hand_name, hand_config,
                              scenario.hardware, supervisor.GetOutputPort("gripper_command"),
                              send)
-    sensors = [force_torque.add_interface(builder, buses.find(sensor.lcm_bus), name, sensor)
-               for name, sensor in scenario.force_torque_sensors.items()]
     images = camera.add_interface(builder, buses.find(scenario.camera.lcm_bus), scenario)
     return HardwareStation(builder, scenario, buses.instances,
-                           [arm_status, hand_status, *sensors, images])
+                           [arm_status, hand_status, *sensors.values(), images])
