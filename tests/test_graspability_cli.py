@@ -145,3 +145,50 @@ def test_grip_span_option_runs_the_grip_test(tmp_path, pile, capsys):
         expected = [c.to_dict() for c in compute_candidates(depth, camera, params=params)]
         assert found[span] == expected
     assert found[None] != found[0.014]
+
+
+def test_the_scenes_own_depth_png_is_read_as_millimetres_and_colour_is_refused(
+        tmp_path, pile, capsys):
+    _, depth = pile
+    save_camera_json(tmp_path / "camera.json", CameraModel(K, top_view_pose(np.zeros(3), FLOOR)))
+    np.save(tmp_path / "depth.npy", depth)
+    millimetres = np.nan_to_num(depth * 1000.0, nan=0.0, posinf=0.0)
+    cv2.imwrite(str(tmp_path / "depth.png"), np.clip(millimetres, 0, 65535).astype(np.uint16))
+    colour = np.dstack([np.full(depth.shape, v, np.uint8) for v in (10, 120, 240)])
+    cv2.imwrite(str(tmp_path / "rgb.png"), colour)
+    out = tmp_path / "grasps.json"
+    code, _, err = run(capsys, tmp_path / "rgb.png", tmp_path / "depth.png",
+                       tmp_path / "depth.npy", "--json", out)
+    assert code == 1 and "colour image, not a height map" in err
+    rgb, png, npy = json.loads(out.read_text())
+    assert "error" in rgb
+    # The same pile, read in millimetres: fingertips at the pile's depths, not 65 m deep.
+    assert png["candidates"] and abs(len(png["candidates"]) - len(npy["candidates"])) <= 1
+    assert max(c["depth_m"] for c in png["candidates"]) < FLOOR + 0.01
+    best = png["candidates"][0]
+    assert any(abs(best["u"] - c["u"]) < 3 and abs(best["v"] - c["v"]) < 3
+               and abs(best["depth_m"] - c["depth_m"]) < 0.003 for c in npy["candidates"])
+
+
+def test_a_bad_image_in_a_batch_is_reported_and_the_good_ones_still_written(
+        tmp_path, pile, capsys):
+    _, depth = pile
+    save_camera_json(tmp_path / "camera.json", CameraModel(K, top_view_pose(np.zeros(3), FLOOR)))
+    np.save(tmp_path / "far.npy", np.full(depth.shape, 1e9, np.float32))
+    np.save(tmp_path / "good.npy", depth)
+    out, overlays = tmp_path / "grasps.json", tmp_path / "overlays"
+    code, _, err = run(capsys, tmp_path / "far.npy", tmp_path / "good.npy", "--json", out,
+                       "--overlay", overlays)
+    assert code == 1 and "coarser than the fingers" in err and "Traceback" not in err
+    far, good = json.loads(out.read_text())
+    assert "error" in far and good["candidates"]
+    assert (overlays / "good_grasps.png").is_file()
+
+
+def test_a_height_map_deeper_than_any_bin_is_warned_about(tmp_path, capsys):
+    levels = np.zeros((120, 160), np.uint16)
+    levels[40:80, 50:110] = 60000
+    cv2.imwrite(str(tmp_path / "deep.png"), levels)
+    _, _, err = run(capsys, tmp_path / "deep.png", "--height-per-level", 0.001,
+                    "--pixel-size", 0.001)
+    assert "span 60.00 m of height" in err

@@ -11,6 +11,7 @@ import argparse
 import json
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
@@ -26,7 +27,15 @@ from tangle_drake.graspability import (
     compute_candidates,
     compute_candidates_from_height_map,
 )
-from tangle_drake.graspability.inputs import height_map_to_depth, read_image_file
+from tangle_drake.graspability.inputs import (
+    DEEP_HEIGHT_MAP_M,
+    ImageFile,
+    height_map_to_depth,
+    height_span,
+    is_grey,
+    millimetres_to_depth,
+    read_image_file,
+)
 from tangle_drake.graspability.overlay import depth_preview, draw_candidates
 from tangle_drake.graspability.workmap import View
 from tangle_drake.gripper import DEFAULT_GRIPPER
@@ -106,6 +115,8 @@ def _process(path: Path, args: argparse.Namespace, hand: HandModel,
     """Candidates for one image: the JSON entry (candidates still objects), a picture of the
     image for the overlay, and the view to draw in."""
     image = read_image_file(path)
+    if _depth_png(image, path, args):  # 16-bit millimetres with its camera: `scene`'s depth.png
+        image = replace(image, array=millimetres_to_depth(image.array), is_depth=True)
     if image.is_depth:
         camera = _camera_for(path, args.camera, cameras)
         start = time.perf_counter()
@@ -113,9 +124,17 @@ def _process(path: Path, args: argparse.Namespace, hand: HandModel,
         elapsed = time.perf_counter() - start
         picture, view = depth_preview(image.array), View.of_camera(camera.intrinsics)
     else:
+        if image.array.ndim == 3 and not is_grey(image.array):
+            raise TangleDrakeError(f"{path}: this is a colour image, not a height map (a "
+                                   "height map is one grey level per pixel, brighter = higher)")
         if args.height_per_level is None or args.pixel_size is None:
             raise TangleDrakeError(f"{path}: a height-map PNG needs --height-per-level and "
                                    "--pixel-size (metres)")
+        span = height_span(image.array, args.height_per_level)
+        if span > DEEP_HEIGHT_MAP_M:
+            print(f"warning: {path}: its grey levels span {span:.2f} m of height at "
+                  f"--height-per-level {args.height_per_level:g}, deeper than any bin: is "
+                  "that the height of one grey level, in metres?", file=sys.stderr)
         start = time.perf_counter()
         candidates = compute_candidates_from_height_map(
             image.array, args.height_per_level, args.pixel_size, hand, params, roi)
@@ -125,6 +144,15 @@ def _process(path: Path, args: argparse.Namespace, hand: HandModel,
     entry = {"image": str(path), "compute_ms": round(elapsed * 1e3, 3),
              "candidates": candidates}
     return entry, picture, view
+
+
+def _depth_png(image: ImageFile, path: Path, args: argparse.Namespace) -> bool:
+    """Whether a PNG is a depth image in millimetres: 16-bit grey, with a camera model (given,
+    or ``camera.json`` beside it, as ``tangle-drake scene`` writes them) and no height-map
+    scale asked for."""
+    return (not image.is_depth and image.array.dtype == np.uint16 and image.array.ndim == 2
+            and args.height_per_level is None
+            and (args.camera is not None or (path.parent / "camera.json").is_file()))
 
 
 def _camera_for(path: Path, given: Path | None, cameras: dict[Path, CameraModel]) -> CameraModel:

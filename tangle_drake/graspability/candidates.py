@@ -24,6 +24,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from tangle_drake.camera import CameraIntrinsics, CameraModel
+from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability.hand import HandModel, as_hand
 from tangle_drake.graspability.index import GraspMaps, grasp_maps
 from tangle_drake.graspability.inputs import check_depth, check_scale, height_map_to_depth
@@ -103,6 +104,14 @@ def candidates_from_depth(depth: np.ndarray, view: View, hand: HandModel | Gripp
     hand = as_hand(hand)
     params = params or GraspabilityParams()
     work = build_work_map(depth, view, params.cell_size_m)
+    try:
+        hand.in_cells(work.cell_m)
+    except ValueError:
+        far = float(np.max(depth[np.isfinite(depth)]))
+        raise TangleDrakeError(
+            f"the image's pixels are {work.cell_m:.3g} m wide at its farthest depth "
+            f"({far:.3g} m), coarser than the fingers ({hand.finger_thickness_m:.3g} m): is "
+            "the depth in metres, and the camera model the image's?") from None
     allowed = roi_mask(roi, view.width, view.height, params.roi_margin_px)
     if allowed is not None:
         work = replace(work, allowed=work.pixel_mask_to_cells(allowed))

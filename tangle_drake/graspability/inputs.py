@@ -61,16 +61,42 @@ def height_map_to_depth(height_map: object, height_per_level_m: float) -> np.nda
     array = _as_image_array(height_map, "height map")
     if array.dtype not in (np.uint8, np.uint16):
         raise TangleDrakeError(f"height map must be 8- or 16-bit unsigned, got {array.dtype}")
-    if array.ndim == 3 and array.shape[2] in (3, 4):
-        levels = array[..., :3].astype(np.float64).mean(axis=2)
+    if array.ndim == 3 and array.shape[2] in (3, 4) and is_grey(array):
+        levels = array[..., 0].astype(np.float64)
     elif array.ndim == 2:
         levels = array.astype(np.float64)
+    elif array.ndim == 3 and array.shape[2] in (3, 4):
+        raise TangleDrakeError("this is a colour image, not a height map (a height map is "
+                               "one grey level per pixel, brighter = higher)")
     else:
-        raise TangleDrakeError(f"height map must be grey (rows, columns) or colour "
-                               f"(rows, columns, 3|4), got shape {array.shape}")
+        raise TangleDrakeError(f"height map must be grey (rows, columns), got shape "
+                               f"{array.shape}")
     check_scale(height_per_level_m, "height per grey level")
     top = np.iinfo(array.dtype).max
     return ((top - levels) * height_per_level_m).astype(np.float32)
+
+
+def is_grey(array: np.ndarray) -> bool:
+    """A 3/4-channel image whose colour channels are all equal (a grey PNG saved as RGB)."""
+    return bool((array[..., 0] == array[..., 1]).all() and (array[..., 1] == array[..., 2]).all())
+
+
+DEEP_HEIGHT_MAP_M = 0.5
+"""A height map whose levels span more than this is suspicious: deeper than any bin."""
+
+
+def height_span(height_map: np.ndarray, height_per_level_m: float) -> float:
+    """The height between the map's lowest and highest pixels, m (for a warning)."""
+    levels = height_map if height_map.ndim == 2 else height_map[..., 0]
+    return float((int(levels.max()) - int(levels.min())) * height_per_level_m)
+
+
+def millimetres_to_depth(millimetres: np.ndarray) -> np.ndarray:
+    """A 16-bit depth image in millimetres (0: nothing seen, as ``tangle-drake scene``'s
+    ``depth.png`` and most depth-camera drivers write it) as metric depth, float32."""
+    depth = millimetres.astype(np.float32) / 1000.0
+    depth[millimetres == 0] = np.nan
+    return depth
 
 
 def check_scale(value: float, what: str) -> float:
