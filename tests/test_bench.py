@@ -347,3 +347,28 @@ def test_clearing_a_quick_bin_counts_what_landed_in_the_tray(tmp_path, capsys):
 def test_open_loop_goes_with_clear():
     with pytest.raises(TangleDrakeError, match="--open-loop goes with --clear"):
         plan(replace(QUICK, open_loop=True))
+
+
+def test_a_scenario_without_parts_is_refused_and_a_scenarios_own_part_is_the_default(tmp_path):
+    text = (diagrams_dir() / "floating_gripper.yaml").read_text()
+    empty = tmp_path / "empty.yaml"
+    empty.write_text(text.replace("count: 15", "count: 0"))
+    with pytest.raises(TangleDrakeError, match="pile has no parts"):
+        plan(BenchOptions(scenario=str(empty), workers=1))
+    rings = tmp_path / "rings.yaml"
+    rings.write_text(text.replace("part: u_hook", "part: c_ring"))
+    config, _, notices = plan(BenchOptions(scenario=str(rings), workers=1,
+                                           methods=["graspability"]))
+    assert [p.name for p in config.parts] == ["c_ring"]
+    assert any("parts from the scenario" in note and "c_ring" in note for note in notices)
+
+
+def test_a_model_of_another_part_is_noticed_in_the_run():
+    from tangle_drake.pick.selection import trained_model_path
+
+    model = trained_model_path("c_ring")
+    _, _, notices = plan(replace(QUICK, methods=["graspability", f"model:{model}"]))
+    assert any("trained on part 'c_ring'" in note and "'u_hook'" in note for note in notices)
+    _, _, notices = plan(replace(QUICK, parts=["c_ring"],
+                                 methods=["graspability", f"model:{model}"]))
+    assert not any("trained on part" in note for note in notices)

@@ -37,6 +37,7 @@ from tangle_drake.bench.trials import (
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.pick.diagram import closed_loop_settings, default_graspability_params
+from tangle_drake.pick.selection import model_part_notice
 from tangle_drake.scenario import parse_scenario
 from tangle_drake.scenario_files import scenario_path
 from tangle_drake.workers import start_workers
@@ -103,8 +104,26 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
         raise TangleDrakeError(f"--workers must be at least 1, got {options.workers}")
     if options.mode is not None and options.mode not in MODES:
         raise TangleDrakeError(f"unknown --mode {options.mode!r}; choose {' or '.join(MODES)}")
+    path = scenario_path(options.scenario if options.scenario is not None
+                         else MODE_SCENARIOS[options.mode or "floating"])
+    try:
+        text = path.read_text()
+    except OSError as error:
+        raise TangleDrakeError(f"cannot read scenario file {path}: {error.strerror}") from error
+    scenario = parse_scenario(text, source=str(path))  # a clear error now, not in every worker
+    if scenario.pile.total_count == 0 and not options.quick:
+        raise TangleDrakeError(f"{path}: the scenario's pile has no parts: there is nothing "
+                               "to pick")
+    notices = []
     parts = []
-    for part in options.parts or (QUICK_PARTS if options.quick else BUILTIN_PARTS):
+    if options.parts is None and options.scenario is not None and not options.quick:
+        names = list(dict.fromkeys((e.part, e.mesh_scale) for e in scenario.pile.parts))
+        notices.append(f"notice: parts from the scenario {path}: "
+                       f"{', '.join(part for part, _ in names)} (pass --parts for others)")
+        parts = [PartSpec(part, load_part(part, mesh_scale=scale).name, scale)
+                 for part, scale in names]
+    for part in [] if parts else (options.parts or (QUICK_PARTS if options.quick
+                                                    else BUILTIN_PARTS)):
         scale = 1.0 if part in BUILTIN_PARTS else options.mesh_scale
         parts.append(PartSpec(part, load_part(part, mesh_scale=scale).name, scale))
     _unique([p.name for p in parts], "part")
@@ -113,7 +132,6 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
         if options.clear else (QUICK_METHODS if options.quick else DEFAULT_METHODS)
     methods = [parse_method(m) for m in options.methods or default_methods]
     _unique([m.name for m in methods], "method")
-    notices = []
     per_part: dict[str, tuple[Method, ...]] = {}
     for spec in parts:
         missing = [m for m in methods if m.needs_model and not m.model_for(spec.name).is_file()]
@@ -127,13 +145,9 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
                            f"({missing[0].model_for(spec.name)}): methods "
                            f"{', '.join(m.name for m in missing)} skipped on it")
         per_part[spec.name] = tuple(m for m in methods if m not in missing)
-    path = scenario_path(options.scenario if options.scenario is not None
-                         else MODE_SCENARIOS[options.mode or "floating"])
-    try:
-        text = path.read_text()
-    except OSError as error:
-        raise TangleDrakeError(f"cannot read scenario file {path}: {error.strerror}") from error
-    mode = scenario_mode(parse_scenario(text, source=str(path)), str(path))  # errors now
+        notices += [note for m in per_part[spec.name] if m.model is not None
+                    and (note := model_part_notice(m.model, spec.name))]
+    mode = scenario_mode(scenario, str(path))
     if options.mode is not None and options.mode != mode:
         raise TangleDrakeError(
             f"--mode {options.mode} disagrees with --scenario {path}, whose carrier makes it "
@@ -143,7 +157,7 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
                          quick_pile if options.quick else None, options.clear,
                          options.open_loop)
     if options.clear and not options.open_loop:
-        closed_loop_settings(parse_scenario(text, source=str(path)))  # a tray, a wrist sensor
+        closed_loop_settings(scenario)  # a tray and a wrist sensor, or a clear error now
     return config, trials, notices
 
 

@@ -31,7 +31,7 @@ from tangle_drake.pick.diagram import (
 from tangle_drake.pick.episode import Clock, PickEpisode, PickRun, RunEnd, run_picks
 from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.planner import PickSettings
-from tangle_drake.pick.selection import TangleChoice, resolve_tangle_choice
+from tangle_drake.pick.selection import TangleChoice, model_part_notice, resolve_tangle_choice
 from tangle_drake.pile import settle_pile
 from tangle_drake.planning.motion import Motion
 from tangle_drake.planning.motions import motion_for
@@ -101,6 +101,8 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     choice = resolve_tangle_choice(part, options.rule, options.model)
     if choice.notice:
         say(choice.notice)
+    if choice.model is not None and (mismatch := model_part_notice(choice.model, part)):
+        say(mismatch)
     say(f"selection: rule {choice.rule}" + (f", model {choice.model}" if choice.model else ""))
     motion = motion_for(scenario)  # before any long work: the scenario must have a robot
     settings = pick_settings(scenario, max_picks=options.picks) if options.open_loop \

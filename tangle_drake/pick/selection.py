@@ -72,6 +72,19 @@ def resolve_tangle_choice(part: str, rule: str | None = None,
     return TangleChoice(None, FALLBACK_RULE, notice)
 
 
+def model_part_notice(model: Path, part: str) -> str | None:
+    """A warning when the checkpoint at ``model`` was trained on another part than ``part``
+    (a built-in name or a mesh's stem): it still runs, but its P(not tangled) means little."""
+    from tangle_drake.tangle_cnn.checkpoint import read_checkpoint  # imports torch
+
+    trained_on = read_checkpoint(Path(model)).get("part")
+    name = Path(part).stem
+    if trained_on is None or str(trained_on) == name:
+        return None
+    return (f"warning: the tangle model {model} was trained on part {trained_on!r}, and the "
+            f"pile is of {name!r}: its P(not tangled) is not this part's")
+
+
 class RuleSelector(LeafSystem):
     """A selection rule that needs no CNN (``graspability``, ``random``) as a Drake system:
     ``candidates`` in; ``scored_candidates`` (best first) and ``selected_grasp`` out, as
