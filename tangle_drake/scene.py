@@ -13,7 +13,10 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context, Diagram
 
+from tangle_drake.bin_model import inner_corners
 from tangle_drake.camera import CameraModel, save_camera_json
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.graspability import bin_roi
 from tangle_drake.pile import PileReport, PileSettler
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import SimulatedStation, build_station, camera_model
@@ -84,6 +87,10 @@ def render_rgb(station: Diagram, context: Context, camera: str = "camera") -> np
 def make_scene(scenario: Scenario, seed: int | None = None,
                progress: Callable[[str], None] | None = None) -> Scene:
     """Build the station, hold the robot still, drop a pile, and render the top camera."""
+    camera = camera_model(scenario)
+    if not bin_roi(camera, inner_corners(scenario.bin)).any():  # before any long work
+        raise TangleDrakeError("the top camera sees nothing of the bin: check the scenario's "
+                               "camera (camera_height, or camera.X_PB) and bin")
     timings: dict[str, float] = {}
     start = time.perf_counter()
     station = build_station(scenario)
@@ -98,7 +105,6 @@ def make_scene(scenario: Scenario, seed: int | None = None,
     depth = render_depth(station, simulator.get_context())
     timings["render_depth"] = time.perf_counter() - start
     rgb = render_rgb(station, simulator.get_context())
-    camera = camera_model(scenario)
     floor_depth = float(camera.X_WC[2, 3] - scenario.bin.floor_height)
     views = {config.name: render_rgb(station, simulator.get_context(), f"sim.{config.name}")
              for config in scenario.view_cameras}

@@ -179,3 +179,15 @@ def test_a_tray_must_stand_beside_the_bin_out_of_the_cameras_view():
     in_view = parse_scenario(base.replace("center: [-0.01, 0.22]", "center: [0.14, 0.50]"))
     with pytest.raises(TangleDrakeError, match="tray shows in the top camera's view"):
         build_station(in_view)
+
+
+def test_scene_refuses_a_camera_that_sees_nothing_of_the_bin(tmp_path, capsys):
+    text = (diagrams_dir() / "pile_only.yaml").read_text()
+    away = tmp_path / "away.yaml"
+    away.write_text(text.replace("camera_height: 0.5", "camera_height: null\ncamera:\n"
+                                 "  X_PB: {translation: [3.0, 3.0, 1.5], rotation: !Rpy "
+                                 "{deg: [180, 0, 0]}}"))  # looking down, beside the bin
+    assert main(["scene", "--scenario", str(away), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "sees nothing of the bin" in err
+    assert "Traceback" not in err
