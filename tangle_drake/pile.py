@@ -28,6 +28,9 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context
 
 from tangle_drake.bin_model import inside_bin
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.parts import load_part
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
 from tangle_drake.station import SimulatedStation
 
@@ -57,6 +60,50 @@ class PileReport:
     @property
     def num_in_bin(self) -> int:
         return self.num_parts - len(self.parked)
+
+
+PACKING = 0.3
+"""The share of its bounding sphere a part takes up in a loose pile (wire parts interleave)."""
+OVERFULL = 5.0
+"""A pile estimated at more than this many bin volumes is refused: it would spill over."""
+GRIP_FRICTION = 0.9
+"""The finger pads' friction coefficient (the gripper model's): what the grip can hold."""
+
+
+def check_pile(scenario: Scenario, spec: GripperSpec = DEFAULT_GRIPPER) -> list[str]:
+    """Before any simulation: refuse a pile that cannot be made or picked (a part larger than
+    the bin, or heavier than the fingers can hold, or far more parts than the bin holds), with
+    the numbers; return warnings for one that is merely fuller than the bin."""
+    bin_config = scenario.bin
+    half_diagonal = float(np.hypot(*bin_config.inner_size)) / 2
+    liftable = 2 * GRIP_FRICTION * spec.grip_force / 9.81  # kg, two pads
+    volume = 0.0
+    for entry in scenario.pile.parts:
+        if entry.count == 0:
+            continue
+        part = load_part(entry.part, mesh_scale=entry.mesh_scale)
+        if part.bounding_radius > half_diagonal:
+            raise TangleDrakeError(
+                f"part {part.name!r} is too large for the bin: it reaches "
+                f"{part.bounding_radius:.3f} m from its centre, the bin's floor only "
+                f"{half_diagonal:.3f} m from its centre (check --mesh-scale: metres per mesh "
+                "unit)")
+        if part.mass > liftable:
+            raise TangleDrakeError(
+                f"part {part.name!r} weighs {part.mass:.2f} kg, more than the gripper's "
+                f"{spec.grip_force:g} N fingers can hold ({liftable:.2f} kg)")
+        volume += entry.count * PACKING * 4 / 3 * np.pi * part.bounding_radius ** 3
+    capacity = bin_config.inner_size[0] * bin_config.inner_size[1] * bin_config.wall_height
+    if volume > OVERFULL * capacity:
+        raise TangleDrakeError(
+            f"the pile of {scenario.pile.total_count} parts needs about {volume * 1e3:.1f} l, "
+            f"{volume / capacity:.1f} times the bin's {capacity * 1e3:.1f} l: use fewer parts "
+            "or a larger bin")
+    if volume > capacity:
+        return [f"warning: the pile of {scenario.pile.total_count} parts needs about "
+                f"{volume * 1e3:.1f} l, more than the bin's {capacity * 1e3:.1f} l: it will "
+                "rise above the walls, and settling takes longer"]
+    return []
 
 
 @dataclass(frozen=True)

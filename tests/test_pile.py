@@ -56,3 +56,42 @@ def test_same_seed_gives_the_same_pile_and_another_seed_does_not():
     for name in first:
         np.testing.assert_allclose(first[name], again[name], atol=1e-9)
     assert any(not np.allclose(first[name], other[name], atol=1e-3) for name in first)
+
+
+def test_a_pile_that_cannot_be_made_or_picked_is_refused_before_any_simulation():
+    from dataclasses import replace
+
+    from tangle_drake.errors import TangleDrakeError
+    from tangle_drake.gripper import GripperSpec
+    from tangle_drake.pile import check_pile
+    from tangle_drake.scenario import PartCount
+    from tangle_drake.scenario_files import resolve_scenario
+
+    scenario = resolve_scenario("pick_demo.yaml")
+
+    def with_pile(part="u_hook", count=15, scale=1.0):
+        return replace(scenario, pile=replace(scenario.pile, parts=[PartCount(part, count,
+                                                                              scale)]))
+
+    assert check_pile(with_pile()) == []
+    with pytest.raises(TangleDrakeError, match=r"too large for the bin.*--mesh-scale"):
+        check_pile(with_pile(scale=6.0))
+    with pytest.raises(TangleDrakeError, match=r"more than the gripper's 0\.1 N fingers"):
+        check_pile(with_pile(), GripperSpec(grip_force=0.1))
+    with pytest.raises(TangleDrakeError, match=r"500 parts needs about .* times the bin's"):
+        check_pile(with_pile(count=500))
+    (warning,) = check_pile(with_pile(count=100))
+    assert "rise above the walls" in warning
+
+
+def test_bench_refuses_a_part_too_large_for_the_bin_up_front(tmp_path):
+    from tangle_drake.bench.runner import BenchOptions, plan
+    from tangle_drake.errors import TangleDrakeError
+    from tangle_drake.paths import diagrams_dir
+
+    text = (diagrams_dir() / "floating_gripper.yaml").read_text().replace(
+        "  - part: u_hook\n    count: 15", "  - part: u_hook\n    count: 15\n    mesh_scale: 6")
+    big = tmp_path / "big.yaml"
+    big.write_text(text)
+    with pytest.raises(TangleDrakeError, match="too large for the bin"):
+        plan(BenchOptions(scenario=str(big), workers=1, methods=["graspability"]))

@@ -38,6 +38,7 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.pick.diagram import closed_loop_settings, default_graspability_params
 from tangle_drake.pick.selection import model_part_notice
+from tangle_drake.pile import check_pile
 from tangle_drake.scenario import parse_scenario
 from tangle_drake.scenario_files import scenario_path
 from tangle_drake.workers import start_workers
@@ -133,7 +134,11 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
     methods = [parse_method(m) for m in options.methods or default_methods]
     _unique([m.name for m in methods], "method")
     per_part: dict[str, tuple[Method, ...]] = {}
+    quick_pile = QUICK_CLEAR["pile_size"] if options.clear else QUICK_PILE_SIZE
+    pile_size = quick_pile if options.quick else None
     for spec in parts:
+        notices += check_pile(part_scenario(BenchConfig(text, (spec,), {},
+                                                        pile_size=pile_size), spec))
         missing = [m for m in methods if m.needs_model and not m.model_for(spec.name).is_file()]
         if missing and explicit:
             raise TangleDrakeError(
@@ -152,10 +157,8 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
         raise TangleDrakeError(
             f"--mode {options.mode} disagrees with --scenario {path}, whose carrier makes it "
             f"{mode} mode: drop --mode, or pass the {MODE_SCENARIOS[options.mode]} scenario")
-    quick_pile = QUICK_CLEAR["pile_size"] if options.clear else QUICK_PILE_SIZE
-    config = BenchConfig(text, tuple(parts), per_part, mode, options.seed,
-                         quick_pile if options.quick else None, options.clear,
-                         options.open_loop)
+    config = BenchConfig(text, tuple(parts), per_part, mode, options.seed, pile_size,
+                         options.clear, options.open_loop)
     if options.clear and not options.open_loop:
         closed_loop_settings(scenario)  # a tray and a wrist sensor, or a clear error now
     return config, trials, notices

@@ -34,10 +34,13 @@ def add_scenario_argument(parser: argparse.ArgumentParser,
 
 
 def run(args: argparse.Namespace) -> int:
+    from tangle_drake.pile import check_pile
     from tangle_drake.scenario_files import resolve_scenario
     from tangle_drake.scene import make_scene
 
     scenario = resolve_scenario(args.scenario)
+    for warning in check_pile(scenario):
+        print(warning)
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
     scene = make_scene(scenario, seed=args.seed, progress=print)

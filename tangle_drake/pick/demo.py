@@ -32,7 +32,7 @@ from tangle_drake.pick.episode import Clock, PickEpisode, PickRun, RunEnd, run_p
 from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.planner import PickSettings
 from tangle_drake.pick.selection import TangleChoice, model_part_notice, resolve_tangle_choice
-from tangle_drake.pile import settle_pile
+from tangle_drake.pile import check_pile, settle_pile
 from tangle_drake.planning.motion import Motion
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario
@@ -97,6 +97,8 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     scenario = with_part(scenario, options.part)
     if scenario.pile.total_count == 0:
         raise TangleDrakeError("the scenario's pile has no parts: there is nothing to pick")
+    for warning in check_pile(scenario):
+        say(warning)
     part = options.part or scenario.pile.parts[0].part
     choice = resolve_tangle_choice(part, options.rule, options.model)
     if choice.notice:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import itertools
+import sys
 from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -19,6 +20,7 @@ from tangle_drake import __version__
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, PartModel, load_part
 from tangle_drake.paths import diagrams_dir
+from tangle_drake.pile import check_pile
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import camera_model
 from tangle_drake.tangle_data.progress import CollectProgress
@@ -77,6 +79,8 @@ def collect(settings: CollectSettings, out: Path, samples: int, workers: int | N
     scenario_text = default_scenario_text() if scenario_text is None else scenario_text
     scenario = data_scenario(scenario_text, settings)
     part = load_part(settings.part, mesh_scale=settings.mesh_scale)  # builds the cache once
+    for warning in check_pile(scenario):  # refuses a pile that cannot be made
+        print(warning, file=sys.stderr)
     store = DatasetStore(out, collection_identity(settings, scenario, part))
     try:
         return _run(store, settings, samples, workers, ray_address, scenario_text, part.name,
