@@ -372,3 +372,15 @@ def test_a_model_of_another_part_is_noticed_in_the_run():
     _, _, notices = plan(replace(QUICK, parts=["c_ring"],
                                  methods=["graspability", f"model:{model}"]))
     assert not any("trained on part" in note for note in notices)
+
+
+def test_a_run_that_finished_no_trial_binds_nothing(tmp_path):
+    from tangle_drake.bench.results import ResultStore
+
+    first = ResultStore(tmp_path, {"methods": ["harmonic"], "seed": 0})
+    assert not first.trials  # it failed before a trial finished (a corrupt model, say)
+    again = ResultStore(tmp_path, {"methods": ["harmonic", "graspability"], "seed": 0})
+    assert any("starting over" in note for note in again.notices)
+    again.add({"part": "u_hook", "trial": 0, "picks": []})
+    with pytest.raises(TangleDrakeError, match="other settings"):
+        ResultStore(tmp_path, {"methods": ["harmonic"], "seed": 0})

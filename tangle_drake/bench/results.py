@@ -50,6 +50,13 @@ class ResultStore:
         except json.JSONDecodeError as error:
             raise TangleDrakeError(f"{path} is corrupt ({error}): choose another --out") \
                 from error
+        if stored != identity and not self._has_trials():
+            # A run that finished no trial (it failed at once, say on a corrupt model) binds
+            # nothing: this one starts over in its place.
+            self.notices.append(f"{self.directory} held a run with other settings and no "
+                                "finished trial: starting over")
+            _write_atomic(path, json.dumps(identity, indent=2, sort_keys=True) + "\n")
+            return
         if stored != identity:
             keys = sorted(k for k in set(stored) | set(identity)
                           if stored.get(k) != identity.get(k))
@@ -57,6 +64,18 @@ class ResultStore:
                 f"{self.directory} holds a benchmark run with other settings (differing: "
                 f"{', '.join(keys)}); run it with the same arguments to resume it, or choose "
                 "another --out")
+
+    def _has_trials(self) -> bool:
+        """Whether the results file holds at least one readable trial."""
+        if not self.path.exists():
+            return False
+        for line in self.path.read_text().splitlines():
+            try:
+                json.loads(line)["part"]
+            except (json.JSONDecodeError, KeyError, TypeError):
+                continue
+            return True
+        return False
 
     def _load(self) -> None:
         if not self.path.exists():
