@@ -6,13 +6,21 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from drake import lcmt_force_torque
+from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform
 from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder, LeafSystem
 
 from tangle_drake.drivers.config import ForceTorqueSensor
 from tangle_drake.drivers.force_torque import sample_draws
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.hardware.loop import run_with_hardware_sim
+from tangle_drake.pick.payload import (
+    PayloadEstimator,
+    PayloadPhase,
+    PayloadRequest,
+    PayloadSettings,
+)
 from tangle_drake.scenario import PartCount
 from tangle_drake.scenario_files import resolve_scenario
 from tangle_drake.station import build_station
@@ -108,6 +116,60 @@ def test_a_part_in_the_fingers_adds_its_weight_and_a_restored_context_replays_th
     other.hold_still(sim.get_mutable_context())
     sim.Initialize()
     assert not np.array_equal(runs[0], samples(other, sim, 0.0, 10))
+
+
+class TareThenWeigh(LeafSystem):
+    """The planner's requests: tare until 0.6 s, nothing, then weigh from 1.0 s."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.DeclareAbstractOutputPort(
+            "request", lambda: AbstractValue.Make(PayloadRequest()),
+            lambda context, value: value.set_value(
+                PayloadRequest(PayloadPhase.TARE, 1) if context.get_time() < 0.6
+                else PayloadRequest(PayloadPhase.WEIGH, 2) if context.get_time() >= 1.0
+                else PayloadRequest()),
+            {self.time_ticket()})
+
+
+@pytest.mark.parametrize("held", [0, 1, 2])
+def test_the_estimator_counts_the_parts_in_the_simulated_fingers(held):
+    """The estimator on the station's own noisy sensor, the station inside a larger diagram:
+    tared open, then none, one or two U-hooks closed in the pads, side by side."""
+    scenario = small("floating_gripper.yaml", parts=2)
+    builder = DiagramBuilder()
+    station = builder.AddSystem(build_station(scenario))
+    plant = station.plant
+    part_mass = station.pile_bodies[0].get_mass(plant.CreateDefaultContext())
+    estimator = builder.AddSystem(PayloadEstimator(PayloadSettings(part_mass=part_mass), 8))
+    requests = builder.AddSystem(TareThenWeigh())
+    builder.Connect(station.GetOutputPort("wrist.force_torque"),
+                    estimator.GetInputPort("force_torque"))
+    builder.Connect(station.GetOutputPort("gantry.state_measured"),
+                    estimator.GetInputPort("carrier_state"))
+    builder.Connect(requests.get_output_port(), estimator.GetInputPort("request"))
+    simulator = Simulator(builder.Build())
+    root = simulator.get_mutable_context()
+    own = station.GetMyMutableContextFromRoot(root)
+    station.hold_still(own)
+    station.GetInputPort("gripper.position").FixValue(own, [0.04])
+    simulator.Initialize()
+    simulator.AdvanceTo(0.7)
+    assert estimator.GetOutputPort("payload").Eval(
+        estimator.GetMyContextFromRoot(root)).tared
+    tcp = plant.GetFrameByName("gripper_tcp").CalcPoseInWorld(station.plant_context(root))
+    for k in range(held):  # 7 mm apart across the pads: 6 mm wires, side by side
+        across = tcp.rotation().matrix() @ np.array([(k - (held - 1) / 2) * 0.007, 0.0, 0.0])
+        plant.SetFreeBodyPose(station.mutable_plant_context(root), station.pile_bodies[k],
+                              RigidTransform(tcp.rotation(), tcp.translation() + across))
+    station.GetInputPort("gripper.position").FixValue(own, [0.0])
+    simulator.AdvanceTo(1.6)
+    estimate = estimator.GetOutputPort("payload").Eval(estimator.GetMyContextFromRoot(root))
+    assert estimate.ready and estimate.trusted and estimate.count == held
+    assert estimate.confidence > 0.99
+    lifted = [station.pile_bodies[k].EvalPoseInWorld(station.plant_context(root))
+              .translation()[2] > 0.5 for k in range(2)]
+    assert sum(lifted) == held
 
 
 def test_each_sample_draws_its_own_noise():

@@ -117,12 +117,15 @@ class _State:
 
 
 def estimate_from(samples: np.ndarray, tare: float, settings: PayloadSettings,
-                  ) -> PayloadEstimate:
-    """The estimate of a window of vertical support forces (N), tared."""
+                  tare_samples: int | None = None) -> PayloadEstimate:
+    """The estimate of a window of vertical support forces (N), less ``tare`` (the mean of
+    ``tare_samples`` samples, as many as ``samples`` by default: its error counts too)."""
     weight = settings.part_mass * G
     parts = (float(np.mean(samples)) - tare) / weight
     spread = float(np.std(samples))
-    std = max(spread, settings.sensor_noise) / math.sqrt(len(samples)) / weight
+    tare_samples = tare_samples or len(samples)
+    std = (max(spread, settings.sensor_noise) / weight
+           * math.sqrt(1 / len(samples) + 1 / tare_samples))
     count = max(round(parts), 0)
     fraction = abs(parts - count)
     # The chance that the true load rounds to ``count``, the estimate being Gaussian.
@@ -198,5 +201,6 @@ class PayloadEstimator(LeafSystem):
         if phase is PayloadPhase.TARE:
             return replace(s, tare=float(np.mean(window)), tared=len(window) >= self._samples)
         if len(window) >= self._samples and s.tare is not None and not s.estimate.ready:
-            return replace(s, estimate=estimate_from(np.array(window), s.tare, self._settings))
+            return replace(s, estimate=estimate_from(
+                np.array(window), s.tare, self._settings, self._samples))
         return s

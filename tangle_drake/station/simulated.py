@@ -88,15 +88,15 @@ class SimulatedStation(Diagram):
         """Fix every driver's command input to hold its model where it is now.
 
         For jobs that run the station without a controller (making a pile, rendering a
-        scene); ``context`` is the station's own. Also primes the command interpolators so
-        the first step commands no jump.
+        scene); ``context`` is the station's own, also where the station is part of a larger
+        diagram. Also primes the command interpolators so the first step commands no jump.
         """
-        plant_context = self.plant_context(context)
+        plant_context = self.GetSubsystemContext(self._plant, context)
         for name, config in self.scenario.model_drivers.items():
             command = driver_module(config).held_command(self._plant, plant_context, name)
             interpolator = self.GetSubsystemByName(f"{name}.command_interpolator")
             interpolator.set_initial_position(
-                interpolator.GetMyMutableContextFromRoot(context), command)
+                self.GetMutableSubsystemContext(interpolator, context), command)
             self.GetInputPort(f"{name}.position").FixValue(context, command)
 
 
