@@ -4,7 +4,10 @@ A dataset directory holds ``manifest.json`` (what made the data: part, crop, gri
 and one shard ``shard_<task>.npz`` per finished task (one settled pile and its lifts). Shards
 are written to a temporary name and renamed, so a killed run leaves only whole shards; a resumed
 run skips the tasks whose shards exist, so no sample is lost or duplicated. The shards are the
-truth; the manifest's ``samples`` count is a summary rebuilt from them.
+truth; the manifest's ``samples`` count is a summary rebuilt from them. A shard damaged on disk
+afterwards (truncated by a full disk, a bad copy) fails the zip's CRC check when read: readers
+skip it with a notice naming it, and a resumed collection moves it aside and collects its task
+again.
 
 Every shard holds the same arrays, one row per sample (see ``SAMPLE_FIELDS``).
 """
@@ -13,7 +16,10 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import tempfile
+import zipfile
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -85,22 +91,59 @@ def write_shard(directory: Path, task: int, samples: dict[str, np.ndarray]) -> P
 
 
 def finished_tasks(directory: Path) -> set[int]:
-    """Tasks whose shards are on disk (whole, by construction)."""
+    """Tasks whose shards are on disk (whole when written; see ``shard_problem``)."""
     return {int(p.stem.split("_")[1]) for p in directory.glob("shard_*.npz")}
 
 
-def stored_fields(directory: Path) -> set[str]:
-    """The arrays the dataset's shards hold (those of its first shard; empty if none)."""
-    tasks = finished_tasks(Path(directory))
-    if not tasks:
-        return set()
-    path = Path(directory) / shard_name(min(tasks))
+UNREADABLE = (OSError, ValueError, EOFError, zipfile.BadZipFile)
+"""What numpy and zipfile raise on a truncated or damaged ``.npz``."""
+
+
+def read_shard(path: Path, fields: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
+    """The ``fields`` (default: all) of one shard, every byte read, so the zip's CRC check
+    catches damage; raises one of ``UNREADABLE`` if the shard is damaged."""
+    with np.load(path) as shard:
+        arrays = {name: shard[name] for name in (shard.files if fields is None else fields)}
+    if len({len(array) for array in arrays.values()}) > 1:
+        raise ValueError("its arrays differ in length")
+    return arrays
+
+
+def shard_problem(path: Path) -> str | None:
+    """Why the shard at ``path`` cannot be used (damaged, or lacking a field), or None."""
     try:
-        with np.load(path) as shard:
-            return set(shard.files)
-    except (OSError, ValueError) as error:
-        raise TangleDrakeError(f"dataset shard {path} is unreadable ({error}); delete it "
-                               "and resume the collection to redo that task") from error
+        arrays = read_shard(path)
+    except UNREADABLE as error:
+        return _reason(error)
+    missing = set(SAMPLE_FIELDS) - set(arrays)
+    return f"it lacks fields {sorted(missing)}" if missing else None
+
+
+def _reason(error: BaseException) -> str:
+    return f"{type(error).__name__}: {error}" if str(error) else type(error).__name__
+
+
+def _print_notice(text: str) -> None:
+    print(f"notice: {text}", file=sys.stderr)
+
+
+def skipped_shard_notice(path: Path, reason: str) -> str:
+    return (f"dataset shard {path} is damaged ({reason}) and was skipped; run the "
+            "`tangle-drake collect` command that made the dataset again (same --out): it "
+            "collects that pile again")
+
+
+def stored_fields(directory: Path) -> set[str]:
+    """The arrays the dataset's shards hold (those of its first readable shard; empty if
+    none)."""
+    directory = Path(directory)
+    for task in sorted(finished_tasks(directory)):
+        try:
+            with np.load(directory / shard_name(task)) as shard:
+                return set(shard.files)
+        except UNREADABLE:
+            continue
+    return set()
 
 
 def write_manifest(directory: Path, info: dict) -> None:
@@ -127,8 +170,10 @@ def read_manifest(directory: Path) -> dict:
     return info
 
 
-def load_samples(directory: Path, fields: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
-    """All samples of a dataset, concatenated in task order (fields default to SAMPLE_FIELDS)."""
+def load_samples(directory: Path, fields: tuple[str, ...] | None = None,
+                 notice: Callable[[str], None] = _print_notice) -> dict[str, np.ndarray]:
+    """All samples of a dataset, concatenated in task order (fields default to SAMPLE_FIELDS);
+    a damaged shard is skipped and ``notice`` told which and how to repair it."""
     directory = Path(directory)
     read_manifest(directory)
     fields = tuple(SAMPLE_FIELDS) if fields is None else fields
@@ -136,12 +181,15 @@ def load_samples(directory: Path, fields: tuple[str, ...] | None = None) -> dict
     for task in sorted(finished_tasks(directory)):
         path = directory / shard_name(task)
         try:
-            with np.load(path) as shard:
-                for name in fields:
-                    parts[name].append(shard[name])
-        except (OSError, ValueError, KeyError) as error:
-            raise TangleDrakeError(f"dataset shard {path} is unreadable ({error}); delete it "
-                                   "and resume the collection to redo that task") from error
+            arrays = read_shard(path, fields)
+        except KeyError as error:  # a whole shard of another format: not damage
+            raise TangleDrakeError(f"dataset shard {path} lacks the field {error}; it was "
+                                   "made by another version: re-collect the dataset") from error
+        except UNREADABLE as error:
+            notice(skipped_shard_notice(path, _reason(error)))
+            continue
+        for name in fields:
+            parts[name].append(arrays[name])
     return {name: (np.concatenate(chunks) if chunks else
                    np.zeros((0,), dtype=(SAMPLE_FIELDS | OPTIONAL_FIELDS)[name]))
             for name, chunks in parts.items()}

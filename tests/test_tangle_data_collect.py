@@ -3,6 +3,7 @@ the same samples, the command line works end to end, and bad input is a clear er
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -226,3 +227,33 @@ def test_manifest_counts_are_json(uninterrupted):
     counts = json.loads((uninterrupted / "manifest.json").read_text())["counts"]
     assert counts["tasks"] == len(finished_tasks(uninterrupted))
     assert counts["tangled"] + counts["not_tangled"] == counts["samples"]
+
+
+def test_damaged_shards_are_skipped_by_readers_and_collected_again(uninterrupted, tmp_path,
+                                                                   capsys):
+    out = tmp_path / "damaged"
+    shutil.copytree(uninterrupted, out)
+    first, second = sorted(finished_tasks(out))[:2]
+    truncated, flipped = out / f"shard_{first:07d}.npz", out / f"shard_{second:07d}.npz"
+    truncated.write_bytes(truncated.read_bytes()[:1000])  # a full disk, a broken copy
+    data = bytearray(flipped.read_bytes())
+    data[len(data) // 2] ^= 0xFF  # one bad byte inside the crops: the zip's CRC fails
+    flipped.write_bytes(bytes(data))
+
+    notices: list[str] = []
+    samples = load_samples(out, notice=notices.append)
+    assert len(notices) == 2 and all("collect" in n and "--out" in n for n in notices)
+    assert str(truncated) in notices[0] and str(flipped) in notices[1]
+    whole = load_samples(uninterrupted)
+    assert len(samples["label"]) < len(whole["label"])
+    assert set(samples["task"].tolist()) == set(whole["task"].tolist()) - {first, second}
+
+    collect(SETTINGS, out, SAMPLES, workers=1, show_progress=False)
+    assert "moved aside" in capsys.readouterr().err
+    assert (out / (truncated.name + ".damaged")).exists()
+    repaired = shards(out)
+    reference = shards(uninterrupted)
+    for task in reference:
+        assert repaired[task] == reference[task], f"task {task} differs"
+    assert read_manifest(out)["counts"] == read_manifest(uninterrupted)["counts"] | {
+        "cpu_s": read_manifest(out)["counts"]["cpu_s"]}

@@ -82,6 +82,8 @@ def collect(settings: CollectSettings, out: Path, samples: int, workers: int | N
     for warning in check_pile(scenario):  # refuses a pile that cannot be made
         print(warning, file=sys.stderr)
     store = DatasetStore(out, collection_identity(settings, scenario, part))
+    for notice in store.notices:
+        print(f"notice: {notice}", file=sys.stderr)
     try:
         return _run(store, settings, samples, workers, ray_address, scenario_text, part.name,
                     show_progress)

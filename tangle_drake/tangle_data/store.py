@@ -10,7 +10,9 @@ The record is written before the shard, both atomically, so a task counts as fin
 exactly when its ``.npz`` exists, and every finished task has its record. Only the process
 that drives the collection writes here (workers return their results to it), so a Ray
 cluster's nodes need no shared disk; a lock file keeps a second collection out of a
-directory while one runs, and temporary files a killed run left behind are removed.
+directory while one runs, and temporary files a killed run left behind are removed. A shard
+damaged on disk since (``tangle_drake.dataset.shard_problem``), or one without its record, is
+moved aside as ``*.damaged`` with a notice, and its task is collected again.
 """
 
 from __future__ import annotations
@@ -20,7 +22,14 @@ import json
 import os
 from pathlib import Path
 
-from tangle_drake.dataset import MANIFEST, finished_tasks, read_manifest, write_manifest
+from tangle_drake.dataset import (
+    MANIFEST,
+    finished_tasks,
+    read_manifest,
+    shard_name,
+    shard_problem,
+    write_manifest,
+)
 from tangle_drake.dataset import write_shard as write_shard_arrays
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_data.simulator import TaskResult
@@ -44,10 +53,17 @@ class DatasetStore:
         self._lock = self._take_lock()
         for stale in self.directory.glob(".tmp_*"):
             stale.unlink()
+        self.notices: list[str] = []
+        """What was repaired on opening (damaged shards moved aside), for the user."""
         self.finished = finished_tasks(self.directory)
         self.totals = {name: 0 for name in COUNTED} | {"tasks": 0}
         for task in sorted(self.finished):
-            self._count(self._read_record(task))
+            record, problem = self._read_record(task)
+            problem = problem or shard_problem(self.directory / shard_name(task))
+            if problem is None:
+                self._count(record)
+            else:
+                self._set_aside(task, problem)
         if created:
             self.write_manifest()
 
@@ -91,14 +107,25 @@ class DatasetStore:
         """Release the directory for other collections."""
         self._lock.close()
 
-    def _read_record(self, task: int) -> dict:
+    def _read_record(self, task: int) -> tuple[dict, str | None]:
+        """The task's record, or why it cannot be read."""
         path = self.directory / record_name(task)
         try:
-            return json.loads(path.read_text())
+            return json.loads(path.read_text()), None
+        except FileNotFoundError:
+            return {}, f"its record {path.name} is missing"
         except (OSError, json.JSONDecodeError) as error:
-            raise TangleDrakeError(f"task record {path} is missing or unreadable ({error}); "
-                                   f"delete shard_{task:07d}.npz and resume to redo the "
-                                   "task") from error
+            return {}, f"its record {path.name} is unreadable ({error})"
+
+    def _set_aside(self, task: int, problem: str) -> None:
+        """Move a damaged task's files to ``*.damaged`` so the task is collected again."""
+        for name in (shard_name(task), record_name(task)):
+            path = self.directory / name
+            if path.exists():
+                os.replace(path, path.with_name(path.name + ".damaged"))
+        self.finished.discard(task)
+        self.notices.append(f"{self.directory / shard_name(task)} was damaged ({problem}): "
+                            "moved aside as *.damaged; its pile is collected again")
 
     def _count(self, record: dict) -> None:
         for name in COUNTED:
