@@ -330,6 +330,9 @@ def test_clearing_a_quick_bin_counts_what_landed_in_the_tray(tmp_path, capsys):
     assert sum(g["landed"] for g in run["grasps"]) == run["delivered"]
     assert all(g["weighed"] is not None or g["disposition"] in ("EMPTY", None)
                for g in run["grasps"])  # closed loop: every held lift was weighed
+    for g in run["grasps"]:  # the load path's truth: a part that landed was held up
+        if g["landed"] and g["disposition"] == "DELIVERED":
+            assert g["held"] >= 1 and g["resting"] is not None
     summary = json.loads((out / "clear_summary.json").read_text())
     figures = summary["overall"]["graspability"]
     assert figures["delivered"] == run["delivered"] and figures["bins"] == 1

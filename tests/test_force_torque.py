@@ -15,6 +15,7 @@ from tangle_drake.drivers.config import ForceTorqueSensor
 from tangle_drake.drivers.force_torque import sample_draws
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.hardware.loop import run_with_hardware_sim
+from tangle_drake.pick.load_path import LoadPathMonitor, held_and_resting
 from tangle_drake.pick.payload import (
     PayloadEstimator,
     PayloadPhase,
@@ -143,6 +144,9 @@ def test_the_estimator_counts_the_parts_in_the_simulated_fingers(held):
     part_mass = station.pile_bodies[0].get_mass(plant.CreateDefaultContext())
     estimator = builder.AddSystem(PayloadEstimator(PayloadSettings(part_mass=part_mass), 8))
     requests = builder.AddSystem(TareThenWeigh())
+    load_path = builder.AddSystem(LoadPathMonitor(plant))
+    builder.Connect(station.GetOutputPort("sim.contact_results"),
+                    load_path.GetInputPort("contact_results"))
     builder.Connect(station.GetOutputPort("wrist.force_torque"),
                     estimator.GetInputPort("force_torque"))
     builder.Connect(station.GetOutputPort("gantry.state_measured"),
@@ -170,6 +174,20 @@ def test_the_estimator_counts_the_parts_in_the_simulated_fingers(held):
     lifted = [station.pile_bodies[k].EvalPoseInWorld(station.plant_context(root))
               .translation()[2] > 0.5 for k in range(2)]
     assert sum(lifted) == held
+    held_now, resting = load_path.GetOutputPort("held_count").Eval(
+        load_path.GetMyContextFromRoot(root))
+    assert (held_now, resting) == (held, 0)
+
+
+def test_the_load_path_follows_chains_of_touching_parts():
+    gripper, parts, bin_floor = frozenset({0, 1}), frozenset({10, 11, 12, 13}), 5
+    touching = {0: {10}, 10: {0, 11}, 11: {10, bin_floor}, 12: {bin_floor},
+                bin_floor: {11, 12}, 13: {12}}
+    touching[12].add(13)
+    held, resting = held_and_resting(touching, parts, gripper)
+    assert held == {10, 11}  # 11 hangs from 10; 12 and 13 only touch the bin and each other
+    assert resting == {11}  # 11 still rests on the bin floor: the wrist reads it light
+    assert held_and_resting({}, parts, gripper) == (set(), set())
 
 
 def test_each_sample_draws_its_own_noise():

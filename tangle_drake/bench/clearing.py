@@ -123,7 +123,7 @@ def grasp_row(record: PickRecord, landed: int) -> dict:
     """One grasp of a clearing as plain data: what it did, and what landed in the tray."""
     return {"index": record.index, "outcome": record.outcome.name,
             "failure": None if record.failure is None else record.failure.value,
-            "lifted": record.lifted,
+            "lifted": record.lifted, "held": record.held, "resting": record.resting,
             "weighed": None if record.estimate is None or not record.estimate.ready
             else round(record.estimate.parts, 3),
             "verdict": None if record.verdict is None else record.verdict.name,

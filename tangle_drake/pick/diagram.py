@@ -6,6 +6,7 @@ lift monitor, wired by port name so the same builder serves the hardware station
     nextage.state_measured, gripper.state_measured ------------------------> PickPlanner
     PickPlanner -> nextage.position, gripper.position -> station
     sim.body_poses -> LiftMonitor -> lifted_count -> PickPlanner   (simulation only)
+    sim.contact_results -> LoadPathMonitor -> held_count -> PickPlanner   (simulation only)
     safety.fault ----------------------------------------------> PickPlanner   (hardware only)
 """
 
@@ -28,6 +29,7 @@ from tangle_drake.graspability.system import GraspabilitySystem
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.parts import load_part
 from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_spec
+from tangle_drake.pick.load_path import LoadPathMonitor
 from tangle_drake.pick.outcome import LiftMonitor, TrayMonitor
 from tangle_drake.pick.payload import PayloadEstimator, PayloadSettings
 from tangle_drake.pick.planner import PickPlanner, PickSettings
@@ -207,6 +209,12 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
         builder.Connect(poses, monitor.GetInputPort("body_poses"))
         builder.Connect(monitor.GetOutputPort("lifted_count"),
                         planner.GetInputPort("lifted_count"))
+        load_path = builder.AddNamedSystem("load_path_monitor (sim only)",
+                                           LoadPathMonitor(station.plant))
+        builder.Connect(station.GetOutputPort("sim.contact_results"),
+                        load_path.GetInputPort("contact_results"))
+        builder.Connect(load_path.GetOutputPort("held_count"),
+                        planner.GetInputPort("held_count"))
         if scenario.tray is not None:
             tray = builder.AddNamedSystem("tray_monitor (sim only)",
                                           TrayMonitor(station.plant, scenario.tray))

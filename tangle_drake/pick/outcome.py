@@ -79,6 +79,11 @@ class PickRecord:
     """Gripper opening measured after the lift, m."""
     lifted: int | None = None
     """Parts the simulation saw brought up (``None`` without a monitor)."""
+    held: int | None = None
+    """Parts held up by the gripper through contacts when ``lifted`` was counted
+    (:class:`~tangle_drake.pick.load_path.LoadPathMonitor`; ``None`` without one)."""
+    resting: int | None = None
+    """Of the ``held`` parts, how many still touched the pile or the bin then."""
     perception_s: float = 0.0
     """Wall time of rendering the depth image and the graspability index, s."""
     cnn_s: float = 0.0

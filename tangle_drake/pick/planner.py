@@ -52,6 +52,9 @@ port                         dir    value
                                     tried first
 ``lifted_count``             in     optional, simulation: parts brought up (``LiftMonitor``),
                                     recorded (and, open loop, judged by)
+``held_count``               in     optional, simulation: parts held up through contacts,
+                                    and of those resting on the pile (``LoadPathMonitor``),
+                                    recorded
 ``payload``                  in     closed loop: the ``PayloadEstimator``'s estimate
 ``wrist.force_torque``       in     closed loop: the wrist sensor (the put-back's force limit)
 ``safety.fault``             in     optional, hardware: 1 after the station's safety stop
@@ -109,6 +112,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
         self._selected = self.DeclareAbstractInputPort("selected_grasp",
                                                        AbstractValue.Make(None))
         self._lifted = self.DeclareVectorInputPort("lifted_count", 1)
+        self._held = self.DeclareVectorInputPort("held_count", 2)
         self._payload = self.DeclareAbstractInputPort("payload",
                                                       AbstractValue.Make(PayloadEstimate()))
         self._wrench = self.DeclareVectorInputPort("wrist.force_torque", 6)
@@ -313,5 +317,9 @@ class PickPlanner(ClosedLoop, LeafSystem):
         lifted = round(self._lifted.Eval(context)[0]) if self._lifted.HasValue(
             context) else None
         outcome = classify_lift(width, lifted, self._settings.empty_width)
-        return replace(record, outcome=outcome, width=width, lifted=lifted)
+        held = resting = None
+        if self._held.HasValue(context):
+            held, resting = (round(n) for n in self._held.Eval(context))
+        return replace(record, outcome=outcome, width=width, lifted=lifted, held=held,
+                       resting=resting)
 
