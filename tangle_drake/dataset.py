@@ -31,7 +31,7 @@ MANIFEST = "manifest.json"
 
 SAMPLE_FIELDS: dict[str, np.dtype] = {
     "crop": np.dtype(np.float32),           # (S, S) metric depth crop, metres (crops.py)
-    "label": np.dtype(np.int8),             # 1 = tangled, 0 = not tangled
+    "label": np.dtype(np.int8),             # 1 = tangled, 0 = not tangled, -1 = no label
     "score": np.dtype(np.float32),          # graspability score in [0, 1]
     "u": np.dtype(np.float32),              # candidate pixel column
     "v": np.dtype(np.float32),              # candidate pixel row
@@ -59,6 +59,12 @@ OPTIONAL_FIELDS: dict[str, np.dtype] = {
     "pose": np.dtype(np.float64),           # (4, 4) candidate's tool pose X_WT
     "part": np.dtype("U64"),                # part type (built-in name or mesh file stem)
     "repeat_tangled": np.dtype(np.int16),   # with --repeat K: how many of K lifts said tangled
+    # A pick log's (tangle_drake.pick.pick_log): the grasp's weighing, and the simulation's
+    # counts to score it by (-1 on hardware).
+    "outcome": np.dtype(np.int8),           # 0 nothing, 1 one part, 2 several, -1 not sure
+    "weighed_parts": np.dtype(np.float32),  # the first weighing, in parts (NaN: none)
+    "sim_lifted": np.dtype(np.int16),       # parts the simulation saw brought up
+    "sim_held": np.dtype(np.int16),         # parts held up through contacts
 }
 
 

@@ -200,9 +200,10 @@ def test_the_demo_picks_one_part_through_the_hardware_interface():
     assert "parts in the bin" in lines[-1]
 
 
-def test_the_closed_loop_weighs_over_lcm_with_the_same_diagram():
+def test_the_closed_loop_weighs_over_lcm_with_the_same_diagram(tmp_path):
     """The closed loop against the hardware simulator: the wrist sensor's messages are all
-    the controller has to count the parts with."""
+    the controller has to count the parts with, and all the pick log labels grasps with."""
+    from tangle_drake.dataset import load_samples
     from tangle_drake.pick.demo import DemoOptions, run_demo
     from tangle_drake.pick.recovery import Disposition
 
@@ -210,10 +211,16 @@ def test_the_closed_loop_weighs_over_lcm_with_the_same_diagram():
     scenario.view_cameras = []
     scenario.pile.parts[0].count = 4
     records = run_demo(DemoOptions(picks=1, scenario=scenario, rule="graspability", seed=1,
-                                   hardware=True, with_hardware_sim=True), lambda _: None)
+                                   hardware=True, with_hardware_sim=True,
+                                   log_picks=tmp_path / "log"), lambda _: None)
     assert all(r.lifted is None for r in records)  # no simulation-only count
     assert records[-1].disposition is Disposition.DELIVERED, [r.describe() for r in records]
     assert records[-1].estimate.count == 1 and records[-1].outcome.value == "one part"
+    logged = load_samples(tmp_path / "log", ("label", "outcome", "sim_lifted", "pile_seed"))
+    weighed = [r for r in records if r.verdict is not None]
+    assert len(logged["label"]) == len(weighed) >= 1
+    assert logged["outcome"][-1] == 1 and logged["label"][-1] == 0  # weighed one: not tangled
+    assert (logged["sim_lifted"] == -1).all()  # hardware: no simulation count
 
 
 @pytest.mark.parametrize("carrier", ["nextage", "gantry"])

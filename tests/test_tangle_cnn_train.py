@@ -160,7 +160,7 @@ def test_bad_datasets_are_named(tmp_path):
     empty = tmp_path / "empty"
     empty.mkdir()
     write_manifest(empty, {"crop": asdict(CropSpec(0.05, 32))})
-    with pytest.raises(TangleDrakeError, match="no samples"):
+    with pytest.raises(TangleDrakeError, match="no labelled samples"):
         train(empty, tmp_path / "m.pt", settings)
 
     def dataset_with(directory: Path, manifest: dict, **changes) -> Path:

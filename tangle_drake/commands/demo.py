@@ -48,6 +48,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="pick as the paper does: one look, one grasp, no weighing; "
                              "--picks counts grasps (default: closed loop, --picks counts "
                              "parts delivered to the tray, each weighed on the way)")
+    parser.add_argument("--log-picks", type=Path, default=None, metavar="DIR",
+                        help="append every weighed grasp (the CNN's crop, and the weighing as "
+                             "its label: several = tangled) to this pick log, a dataset that "
+                             "`tangle-drake train` and `evaluate` read; runs add to it, on "
+                             "hardware too")
     parser.add_argument("--with-hardware-sim", action="store_true",
                         help="with --hardware: run the hardware simulator in this process, "
                              "both sides over memq:// (nothing leaves the process)")
@@ -61,7 +66,8 @@ def run(args: argparse.Namespace) -> int:
         picks=args.picks, part=args.part, scenario=args.scenario, seed=args.seed,
         rule=args.rule, model=args.model, meshcat=args.meshcat, record=args.record,
         diagram=args.diagram, hardware=args.hardware,
-        with_hardware_sim=args.with_hardware_sim, open_loop=args.open_loop))
+        with_hardware_sim=args.with_hardware_sim, open_loop=args.open_loop,
+        log_picks=args.log_picks))
     if args.meshcat and sys.stdin.isatty():
         input("Meshcat stays up until you press Enter.")
     return 0

@@ -16,8 +16,10 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context, Diagram
 
 from tangle_drake.bin_model import inside_bin
+from tangle_drake.crops import CropSpec
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graphviz import write_graphviz
+from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.hardware.buses import network_bus_url
 from tangle_drake.hardware.config import IN_PROCESS_URL
 from tangle_drake.hardware.loop import HardwareInTheLoop
@@ -30,6 +32,7 @@ from tangle_drake.pick.diagram import (
 )
 from tangle_drake.pick.episode import Clock, PickEpisode, PickRun, RunEnd, run_picks
 from tangle_drake.pick.outcome import PickRecord, summarize
+from tangle_drake.pick.pick_log import PickLog, pick_log_identity
 from tangle_drake.pick.planner import PickSettings
 from tangle_drake.pick.selection import TangleChoice, model_part_notice, resolve_tangle_choice
 from tangle_drake.pile import check_pile, settle_pile
@@ -38,6 +41,7 @@ from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario
 from tangle_drake.scenario_files import resolve_scenario
 from tangle_drake.station import SimulatedStation, build_station
+from tangle_drake.tangle_cnn.model import load_tangle_model
 
 RECORD_FPS = 20.0
 """Frames per second of ``--record``'s replay: smooth enough, and a third of Meshcat's 64
@@ -69,6 +73,8 @@ class DemoOptions:
     open_loop: bool = False
     """Pick as the paper does: one look, one grasp, no weighing (``picks`` grasps, not
     deliveries)."""
+    log_picks: Path | None = None
+    """Append every weighed grasp to this pick log (``tangle_drake.pick.pick_log``)."""
 
 
 def with_part(scenario: Scenario, part: str | None) -> Scenario:
@@ -88,6 +94,9 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
         raise TangleDrakeError(f"--record must name an .html file, not {options.record}")
     if options.with_hardware_sim and not options.hardware:
         raise TangleDrakeError("--with-hardware-sim goes with --hardware")
+    if options.log_picks is not None and options.open_loop:
+        raise TangleDrakeError("--log-picks labels each grasp with its weighing, which the "
+                               "open loop does not make: leave out --open-loop")
     if options.hardware and (options.meshcat or options.record or options.diagram):
         raise TangleDrakeError("--meshcat, --record and --diagram show the simulated station; "
                                "with --hardware there is none in the controller (run "
@@ -109,8 +118,26 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     motion = motion_for(scenario)  # before any long work: the scenario must have a robot
     settings = pick_settings(scenario, max_picks=options.picks) if options.open_loop \
         else closed_loop_settings(scenario, max_picks=options.picks)
+    if options.log_picks is None:
+        return _run_demo(options, scenario, choice, settings, motion, say, None)
+    crop = load_tangle_model(choice.model).crop if choice.model else CropSpec.for_gripper()
+    log = PickLog(options.log_picks, pick_log_identity(part, crop, DEFAULT_GRIPPER))
+    for notice in log.notices:
+        say(f"notice: {notice}")
+    try:
+        return _run_demo(options, scenario, choice, replace(settings, record_crop=crop),
+                         motion, say, log)
+    finally:
+        log.close()
+        say(f"pick log {log.directory}: {log.logged} grasp(s) added"
+            + (f", {log.skipped} not weighed or not tried, left out" if log.skipped else ""))
+
+
+def _run_demo(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
+              settings: PickSettings, motion: Motion, say: Callable[[str], None],
+              log: PickLog | None) -> list[PickRecord]:
     if options.hardware:
-        return _run_hardware(options, scenario, choice, settings, motion, say)
+        return _run_hardware(options, scenario, choice, settings, motion, say, log)
 
     meshcat = None
     if options.meshcat or options.record:
@@ -121,6 +148,8 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     pile = settle_pile(station, scenario, options.seed)
     say(f"pile: {pile.report.num_in_bin}/{pile.report.num_parts} parts in the bin, settled in "
         f"{pile.report.wall_time:.1f} s")
+    if log is not None:
+        log.pile_seed = pile.report.seed
     pick = build_pick_diagram(scenario, choice, motion, station=station,
                               settings=settings, seed=options.seed or 0)
     if options.diagram is not None:
@@ -134,7 +163,7 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
         meshcat.StartRecording(RECORD_FPS, set_visualizations_while_recording=options.meshcat)
     in_bin = _bin_count(pick, episode.simulator, scenario, scenario.pile.total_count)
     records = _run(episode.simulator, pick, options.picks, say, in_bin,
-                   closed=settings.recovery is not None)
+                   closed=settings.recovery is not None, log=log)
     if meshcat is not None and options.record:
         meshcat.StopRecording()
         meshcat.PublishRecording()
@@ -146,8 +175,8 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
 
 
 def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
-                  settings: PickSettings, motion: Motion,
-                  say: Callable[[str], None]) -> list[PickRecord]:
+                  settings: PickSettings, motion: Motion, say: Callable[[str], None],
+                  log: PickLog | None) -> list[PickRecord]:
     """The same pick diagram around the hardware station: against the hardware simulator in
     this process over ``memq://`` (``--with-hardware-sim``), or against the robot's drivers on
     the scenario's LCM bus, in real time."""
@@ -166,8 +195,10 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
         robot = loop.robot
         in_bin = _bin_count(None, robot.simulator, scenario, robot.pile.num_in_bin,
                             robot.station)
+        if log is not None:
+            log.pile_seed = robot.pile.seed
         records = _run(loop, built[0], options.picks, say, in_bin,
-                       closed=settings.recovery is not None)
+                       closed=settings.recovery is not None, log=log)
         say(f"{summarize(records)}; now {in_bin()}; "
             f"wall time {time.perf_counter() - start:.0f} s")
         return records
@@ -180,7 +211,8 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
     say(f"waiting for the robot on {url} ...")
     station.initialize(simulator)
     say(f"robot connected; picking {options.picks} part(s)")
-    records = _run(simulator, built[0], options.picks, say, closed=settings.recovery is not None)
+    records = _run(simulator, built[0], options.picks, say,
+                   closed=settings.recovery is not None, log=log)
     say(f"{summarize(records)}; wall time {time.perf_counter() - start:.0f} s")
     return records
 
@@ -210,12 +242,19 @@ def _bin_count(pick: PickDiagram | None, simulator: Simulator, scenario: Scenari
 
 
 def _run(clock: Clock, pick: PickDiagram, picks: int, say: Callable[[str], None],
-         in_bin: Callable[[], str] | None = None, closed: bool = False) -> list[PickRecord]:
-    """Run the picks, reporting each as it ends; in simulation with what is left in the bin
-    (``in_bin``), so a part that a pick pushed over the wall shows up at that pick."""
+         in_bin: Callable[[], str] | None = None, closed: bool = False,
+         log: PickLog | None = None) -> list[PickRecord]:
+    """Run the picks, reporting each as it ends (and adding it to ``log``); in simulation with
+    what is left in the bin (``in_bin``), so a part that a pick pushed over the wall shows up
+    at that pick."""
     limit = picks * SIM_TIME_PER_PICK * (2 if closed else 1)
-    run: PickRun = run_picks(clock, pick, limit, on_pick=lambda record: say(
-        record.describe() + ("" if in_bin is None else f" | {in_bin()}")))
+
+    def finished(record: PickRecord) -> None:
+        say(record.describe() + ("" if in_bin is None else f" | {in_bin()}"))
+        if log is not None:
+            log.add(record)
+
+    run: PickRun = run_picks(clock, pick, limit, on_pick=finished)
     if run.end is RunEnd.STOPPED:
         say(f"safety stop: {run.safety_message}; the arm holds its measured pose. Fix the "
             "cause and run the demo again: it starts from the measured state.")

@@ -165,9 +165,12 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
     graspability = builder.AddNamedSystem(
         "graspability", GraspabilitySystem(camera, DEFAULT_GRIPPER, params, roi))
     planner_settings = settings or PickSettings()
-    planner = builder.AddNamedSystem("pick_planner", PickPlanner(motion, planner_settings))
+    planner = builder.AddNamedSystem("pick_planner", PickPlanner(motion, planner_settings,
+                                                                 camera.intrinsics))
     depth = station.GetOutputPort("camera.depth_image")
     builder.Connect(depth, graspability.GetInputPort("depth_image"))
+    if planner_settings.record_crop is not None:
+        builder.Connect(depth, planner.GetInputPort("depth_image"))
     builder.Connect(graspability.GetOutputPort("candidates"), planner.GetInputPort("candidates"))
     if selection is not None:
         scored, selected = selection(builder, depth, graspability.GetOutputPort("candidates"))

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from pydrake.trajectories import PiecewisePolynomial
 
+from tangle_drake.crops import CropSpec
 from tangle_drake.drivers.parallel_jaw import empty_grasp_width
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.pick.choose import EmptyGrasp, RepeatRule
@@ -82,6 +83,9 @@ class PickSettings:
     repeat_depth: float = 0.005
     recovery: RecoverySettings | None = None
     """``None``: open loop (the paper's). Else weigh every lift and act on it."""
+    record_crop: CropSpec | None = None
+    """Keep the tried candidate's depth crop of this size in its record (for a pick log);
+    needs the planner's ``depth_image`` input and its camera's intrinsics."""
 
     def __post_init__(self) -> None:
         if self.max_picks < 1:

@@ -100,6 +100,9 @@ class PickRecord:
     """Closed loop: what was done about it, in order (weighing again, shaking, putting back)."""
     disposition: Disposition | None = None
     """Closed loop: how the grasp ended (delivered to the tray, empty, put back)."""
+    crop: np.ndarray | None = None
+    """With ``PickSettings.record_crop``: the tried candidate's depth crop (metres) in the
+    image it was chosen from, as the tangle CNN sees it."""
 
     def describe(self) -> str:
         """One line for people: the outcome (and, closed loop, the weighing and what was done

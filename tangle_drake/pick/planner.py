@@ -58,6 +58,8 @@ port                         dir    value
 ``payload``                  in     closed loop: the ``PayloadEstimator``'s estimate
 ``wrist.force_torque``       in     closed loop: the wrist sensor (the put-back's force limit)
 ``safety.fault``             in     optional, hardware: 1 after the station's safety stop
+``depth_image``              in     optional, with ``settings.record_crop``: the camera's
+                                    depth image, cropped into each record
 ``{motion.command_port}``    out    the manipulator's command (``nextage.position``)
 ``gripper.position``         out    commanded opening, m
 ``payload.request``          out    what the ``PayloadEstimator`` should do now
@@ -76,7 +78,10 @@ from typing import Any
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
+from pydrake.systems.sensors import ImageDepth32F
 
+from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.crops import candidate_crops
 from tangle_drake.failures import FailureKind, pick_failure
 from tangle_drake.pick.choose import EmptyGrasp, choose, rank_scored
 from tangle_drake.pick.closed_loop import FALLBACK, ClosedLoop
@@ -98,10 +103,14 @@ _MOVING = (*_PLANNED, Mode.SHAKE, Mode.PUT_BACK, Mode.SHAKE_OFF, Mode.RAISE)
 class PickPlanner(ClosedLoop, LeafSystem):
     """The pick state machine (see the module docstring), driving ``motion``'s manipulator."""
 
-    def __init__(self, motion: Motion, settings: PickSettings | None = None) -> None:
+    def __init__(self, motion: Motion, settings: PickSettings | None = None,
+                 intrinsics: CameraIntrinsics | None = None) -> None:
         super().__init__()
         self._motion = motion
         self._settings = settings or PickSettings()
+        if self._settings.record_crop is not None and intrinsics is None:
+            raise ValueError("PickSettings.record_crop needs the camera's intrinsics")
+        self._intrinsics = intrinsics
         self._recovery = self._settings.recovery
         self._measured = self.DeclareVectorInputPort(motion.measured_port,
                                                      motion.measured_size)
@@ -117,6 +126,8 @@ class PickPlanner(ClosedLoop, LeafSystem):
                                                       AbstractValue.Make(PayloadEstimate()))
         self._wrench = self.DeclareVectorInputPort("wrist.force_torque", 6)
         self._fault = self.DeclareVectorInputPort("safety.fault", 1)
+        self._depth = self.DeclareAbstractInputPort("depth_image",
+                                                    AbstractValue.Make(ImageDepth32F()))
         self._state = self.DeclareAbstractState(AbstractValue.Make(
             PlannerState(Mode.SETTLE, 0.0, np.zeros(motion.command_size),
                          self._settings.open_width)))
@@ -303,6 +314,10 @@ class PickPlanner(ClosedLoop, LeafSystem):
             record.reason = "no candidate can be picked (" + ", ".join(
                 f"{n} {kind.value}" for kind, n in kinds.items()) + ")"
             return self._finish(replace(s, mode=Mode.SETTLE), record, t)
+        if self._settings.record_crop is not None and self._depth.HasValue(context):
+            depth = np.asarray(self._depth.Eval(context).data)[:, :, 0]
+            record.crop = candidate_crops(depth, self._intrinsics, [record.candidate],
+                                          self._settings.record_crop)[0]
         s = replace(s, plan=plan, record=record, started=t, width=self._settings.open_width)
         return self._enter(Mode.APPROACH, s, t)
 

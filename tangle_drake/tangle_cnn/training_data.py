@@ -50,22 +50,27 @@ class TrainingData:
 
 def load_checked_samples(directory: Path, extra_fields: tuple[str, ...] = ()
                          ) -> tuple[dict[str, np.ndarray], CropSpec, dict]:
-    """The ``FIELDS`` (and ``extra_fields``) of every sample as stored (``fingerprint``
-    hashes them so), the crop spec and the manifest; ``TangleDrakeError`` naming
-    ``directory`` if there are no samples or they are unusable."""
+    """The ``FIELDS`` (and ``extra_fields``) of every labelled sample as stored
+    (``fingerprint`` hashes them so), the crop spec and the manifest; ``TangleDrakeError``
+    naming ``directory`` if there are no samples or they are unusable. Samples without a
+    tangle label (``label`` -1: a pick log's empty grasps) are left out."""
     directory = Path(directory)
     manifest = read_manifest(directory)
     samples = load_samples(directory, (*FIELDS, *extra_fields))
+    labelled = samples["label"] != -1
+    if not labelled.all():
+        samples = {name: array[labelled] for name, array in samples.items()}
     crops, labels = samples["crop"], samples["label"].astype(np.int64)
     depths = samples["depth_m"]
     if len(labels) == 0:
-        raise TangleDrakeError(f"dataset {directory} has no samples yet; collect some first")
+        raise TangleDrakeError(f"dataset {directory} has no labelled samples yet; collect "
+                               "some first")
     if crops.ndim != 3 or crops.shape[1] != crops.shape[2]:
         raise TangleDrakeError(f"dataset {directory}: crops have shape {crops.shape[1:]}, "
                                "not square")
     crop = _crop_spec(manifest, crops.shape[1], directory)
     if not np.isin(labels, (0, 1)).all():
-        raise TangleDrakeError(f"dataset {directory}: labels must be 0 or 1")
+        raise TangleDrakeError(f"dataset {directory}: labels must be 0 or 1 (-1: none)")
     if not (np.isfinite(crops).all() and np.isfinite(depths).all() and (depths > 0).all()):
         raise TangleDrakeError(f"dataset {directory}: crops and depths must be finite, "
                                "depths positive")
