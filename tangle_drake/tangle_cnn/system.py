@@ -33,6 +33,10 @@ from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.tangle_cnn.model import TangleModel, load_tangle_model
 from tangle_drake.tangle_cnn.selection import ScoredCandidate, check_rule, rank_candidates
 
+WARM_UP_CANDIDATES = 16
+"""Candidates the network is warmed up for: at least the pick diagram's graspability top-k
+(10); a smaller batch then needs no new buffers."""
+
 
 class _Result(NamedTuple):
     scored: list[ScoredCandidate]
@@ -43,9 +47,13 @@ class TangleCnnSystem(LeafSystem):
     """Scores grasp candidates with the tangle CNN and selects one by ``rule``."""
 
     def __init__(self, model: TangleModel | Path | str, intrinsics: CameraIntrinsics,
-                 rule: str = "harmonic", seed: int = 0) -> None:
+                 rule: str = "harmonic", seed: int = 0, warm_up: int = WARM_UP_CANDIDATES) -> None:
+        """``warm_up``: predict once for that many candidates now, so the first pick does
+        not pay torch's first-call costs (0: do not)."""
         super().__init__()
         self._model = model if isinstance(model, TangleModel) else load_tangle_model(model)
+        if warm_up > 0:
+            self._model.warm_up(warm_up)
         self._intrinsics = intrinsics
         self._rule = check_rule(rule)
         self._seed = seed

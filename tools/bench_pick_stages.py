@@ -1,0 +1,58 @@
+"""Benchmark: where a pick's computation goes inside the pick diagram, first pick included.
+
+Runs the demo (closed loop) for ``--picks`` picks and prints, per grasp, the wall time of
+perception (render + graspability), of the tangle CNN stage (crops, target mask, network and
+the rule, for the diagram's graspability top-k candidates) and of planning, and how many times
+the graspability and CNN systems computed during the run (once per look is the goal: their
+outputs are cached on their inputs and read only when the planner looks).
+
+    python tools/bench_pick_stages.py [--scenario pick_demo.yaml] [--picks 3] [--seed 0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import time
+
+from tangle_drake.graspability.system import GraspabilitySystem
+from tangle_drake.pick.demo import DemoOptions, run_demo
+from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.tangle_cnn.system import TangleCnnSystem
+
+
+def _count_calls(calls: collections.Counter, cls: type, name: str) -> None:
+    method = getattr(cls, name)
+
+    def counted(self, *args, **kwargs):
+        calls[cls.__name__] += 1
+        return method(self, *args, **kwargs)
+
+    setattr(cls, name, counted)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenario", default="pick_demo.yaml")
+    parser.add_argument("--picks", type=int, default=3)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    calls: collections.Counter = collections.Counter()
+    _count_calls(calls, GraspabilitySystem, "_calc_candidates")
+    _count_calls(calls, TangleCnnSystem, "_calc_result")
+    scenario = resolve_scenario(args.scenario)
+    scenario.view_cameras = []
+    start = time.perf_counter()
+    records = run_demo(DemoOptions(picks=args.picks, scenario=scenario, seed=args.seed),
+                       lambda _: None)
+    print(f"{args.scenario}, seed {args.seed}: {len(records)} grasps in "
+          f"{time.perf_counter() - start:.0f} s wall")
+    for r in records:
+        print(f"grasp {r.index}: perception {1e3 * r.perception_s:6.1f} ms, CNN "
+              f"{1e3 * r.cnn_s:5.1f} ms, planning {1e3 * r.planning_s:6.1f} ms")
+    print(f"computations per grasp: graspability {calls['GraspabilitySystem'] / len(records):.1f}"
+          f", CNN {calls['TangleCnnSystem'] / len(records):.1f}")
+
+
+if __name__ == "__main__":
+    main()
