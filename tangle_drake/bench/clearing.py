@@ -48,10 +48,6 @@ class ClearWorker:
     def __init__(self, config: BenchConfig) -> None:
         self.config = config
         self._rigs: dict[str, _Rig] = {}
-        if any(m.needs_model for methods in config.methods.values() for m in methods):
-            import torch
-
-            torch.set_num_threads(1)  # one worker, one core (see TrialWorker)
 
     def run_task(self, task: tuple[int, int]) -> dict:
         part_index, trial = task

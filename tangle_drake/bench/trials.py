@@ -148,12 +148,6 @@ class TrialWorker:
     def __init__(self, config: BenchConfig) -> None:
         self.config = config
         self._rigs: dict[str, _Rig] = {}
-        if any(m.needs_model for methods in config.methods.values() for m in methods):
-            import torch
-
-            # A worker is one core's worth: a second torch thread only waits on the other
-            # worker's core (the CNN took ~180 ms instead of ~4 ms in 4 of 10 picks).
-            torch.set_num_threads(1)
 
     def run_task(self, task: tuple[int, int]) -> dict:
         """One trial's result: the pile, and one pick per method (see ``results``)."""
