@@ -42,6 +42,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         if not _stdout_gone():
             raise  # some other pipe broke: that is a real error
         return SIGPIPE_EXIT
+    except OSError as error:
+        if error.filename is None:
+            raise  # not about a file the user named: a real error, with its traceback
+        print(f"error: {error.filename}: {error.strerror or error}", file=sys.stderr)
+        return 2
 
 
 SIGPIPE_EXIT = 141

@@ -17,7 +17,6 @@ from __future__ import annotations
 import json
 import os
 import sys
-import tempfile
 import zipfile
 from collections.abc import Callable
 from pathlib import Path
@@ -83,15 +82,16 @@ def write_shard(directory: Path, task: int, samples: dict[str, np.ndarray]) -> P
     arrays = {name: np.asarray(array, dtype=(SAMPLE_FIELDS | OPTIONAL_FIELDS)[name])
               for name, array in samples.items()}
     path = directory / shard_name(task)
-    fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp_", suffix=".npz")
+    # Opened by name, not with mkstemp, so the shard gets the user's umask (mkstemp: 0600).
+    tmp = directory / f".tmp_{os.getpid()}_{path.name}"
     try:
-        with os.fdopen(fd, "wb") as handle:
+        with open(tmp, "wb") as handle:
             np.savez(handle, **arrays)
             handle.flush()
             os.fsync(handle.fileno())
         os.replace(tmp, path)
     except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise
     return path
 

@@ -9,6 +9,11 @@ from pathlib import Path
 from tangle_drake.errors import TangleDrakeError
 
 
+def graphviz_installed() -> bool:
+    """Whether Graphviz's ``dot`` is on the PATH (needed for .svg and .png)."""
+    return shutil.which("dot") is not None
+
+
 def write_graphviz(dot_source: str, out: Path) -> None:
     """Write Graphviz source as ``out``: text for .dot, rendered by ``dot`` otherwise."""
     suffix = out.suffix.lower().lstrip(".")

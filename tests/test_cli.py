@@ -29,3 +29,11 @@ def test_a_broken_pipe_elsewhere_is_not_hidden(monkeypatch):
     monkeypatch.setattr(diagram_command, "run", broken)
     with pytest.raises(BrokenPipeError, match="a worker's pipe"):
         main(["diagram"])
+
+
+def test_a_path_that_cannot_be_written_is_named_without_a_traceback(tmp_path, capsys):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    assert main(["scene", "--scenario", "pile_only.yaml", "--out", str(blocker / "x")]) == 2
+    err = capsys.readouterr().err
+    assert f"{blocker / 'x'}: Not a directory" in err and "Traceback" not in err

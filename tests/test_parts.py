@@ -15,7 +15,15 @@ from pydrake.multibody.tree import RotationalInertia, SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.parts import BUILTIN_PARTS, PartModel, catalog, load_part, mesh_import, wire
+from tangle_drake.parts import (
+    BUILTIN_PARTS,
+    PartModel,
+    catalog,
+    library,
+    load_part,
+    mesh_import,
+    wire,
+)
 from tangle_drake.parts import build as part_build
 
 STEEL = 7850.0
@@ -193,7 +201,8 @@ def test_nonconvex_mesh_gives_convex_pieces(u_stl, monkeypatch, caplog, tmp_path
     assert _files(load_part(u_stl, mesh_scale=0.001).sdf_path.parent) == _files(entry)
 
 
-def test_mesh_with_a_hole_is_capped_with_a_warning(tmp_path, caplog):
+def test_mesh_with_a_hole_is_capped_with_a_warning(tmp_path, caplog, monkeypatch):
+    monkeypatch.setattr(library, "_WARNED", set())
     mesh = _u_tube_mm()
     cap = np.arange(len(mesh.faces)) < wire.TUBE_SIDES * 6  # drop one round end
     mesh.update_faces(~cap)
@@ -209,7 +218,8 @@ def test_mesh_with_a_hole_is_capped_with_a_warning(tmp_path, caplog):
     _load_in_drake(part, caplog)
 
 
-def test_mesh_that_stays_open_falls_back_to_its_hull(tmp_path, caplog):
+def test_mesh_that_stays_open_falls_back_to_its_hull(tmp_path, caplog, monkeypatch):
+    monkeypatch.setattr(library, "_WARNED", set())
     box = trimesh.creation.box(extents=(40.0, 20.0, 10.0))
     fin = trimesh.Trimesh(  # an extra face on one edge: three faces share it, no repair helps
         np.vstack([box.vertices, [[0.0, 0.0, 0.0]]]),
@@ -223,6 +233,10 @@ def test_mesh_that_stays_open_falls_back_to_its_hull(tmp_path, caplog):
     assert part.mass == pytest.approx(STEEL * 40e-3 * 20e-3 * 10e-3, rel=1e-6)
     _load_in_drake(part, caplog)
     caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="tangle_drake"):
+        load_part(path, mesh_scale=0.001)  # again in this process: said once is enough
+    assert "convex hull" not in caplog.text
+    monkeypatch.setattr(library, "_WARNED", set())  # as in a new process
     with caplog.at_level(logging.WARNING, logger="tangle_drake"):
         load_part(path, mesh_scale=0.001)  # from the cache: still warned
     assert "convex hull" in caplog.text

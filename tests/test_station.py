@@ -147,6 +147,16 @@ def test_diagram_command_writes_graphviz(tmp_path):
     assert text.startswith("digraph") and "camera.depth_image" in text
 
 
+def test_diagram_without_graphviz_writes_dot_text_by_default(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("PATH", str(tmp_path))  # no `dot` anywhere
+    assert main(["diagram", "--scenario", "pile_only.yaml"]) == 0
+    assert "apt-get install graphviz" in capsys.readouterr().out
+    assert (tmp_path / "station.dot").read_text().startswith("digraph")
+    assert main(["diagram", "--scenario", "pile_only.yaml", "--out", "station.svg"]) == 2
+    assert "--out station.dot" in capsys.readouterr().err  # asked for .svg: said what to do
+
+
 def test_non_editable_install_finds_models_and_scenarios(tmp_path):
     """A wheel install must carry models/ and diagrams/ and resolve package://nextage."""
     import tangle_drake

@@ -13,7 +13,7 @@ from cli_run import run_command
 from tangle_drake.dataset import load_samples, write_shard
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.evaluate import evaluate_model
-from tangle_drake.tangle_cnn.metrics import balanced_accuracy
+from tangle_drake.tangle_cnn.metrics import FEW_PER_CLASS, balanced_accuracy, few_samples_warning
 from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.synthetic import write_synthetic_dataset
 from tangle_drake.tangle_cnn.train import TrainSettings, train
@@ -89,6 +89,12 @@ def test_figures_by_cause_partition_the_samples(trained, tmp_path):
     assert disturbed.samples == (~tangled & (causes["max_rise_m"] > 0.01)).sum() > 0
 
 
+def test_few_samples_of_a_class_are_warned_of():
+    assert few_samples_warning(FEW_PER_CLASS, FEW_PER_CLASS, "split") is None
+    assert "only 3 tangled and 500 untangled" in few_samples_warning(3, 500, "split")
+    assert few_samples_warning(500, FEW_PER_CLASS - 1, "split") is not None
+
+
 def test_balanced_accuracy_weighs_the_classes_equally():
     labels = np.array([1, 0, 0, 0, 0])
     assert balanced_accuracy(labels, np.array([0.9, 0.1, 0.1, 0.1, 0.9])) == pytest.approx(
@@ -103,8 +109,9 @@ def test_cli_prints_and_writes_the_figures(trained, tmp_path, capsys):
     out = tmp_path / "new" / "figures.json"  # folders are made
     assert run_evaluate("--data", str(tmp_path / "test"), "--model", str(model_path),
                         "--json", str(out)) == 0
-    printed = capsys.readouterr().out
-    assert "48 samples, 24 tangled" in printed and "ROC-AUC" in printed
+    captured = capsys.readouterr()
+    assert "48 samples, 24 tangled" in captured.out and "ROC-AUC" in captured.out
+    assert "only 24 tangled and 24 untangled samples" in captured.err  # too few to trust
     figures = json.loads(out.read_text())
     assert figures["samples"] == 48 and 0.5 <= figures["accuracy"] <= 1
     (tmp_path / "file").write_text("")

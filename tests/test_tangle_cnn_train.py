@@ -148,8 +148,16 @@ def test_early_stopping_and_nothing_left_to_do(dataset, tmp_path):
     assert train_module._stop_reason(state, TrainSettings(epochs=3, patience=9)) == "max epochs"
     assert train_module._stop_reason(state, TrainSettings(epochs=9, patience=3)) is None
     train(dataset, out, TrainSettings(epochs=1, augment="none"), device="cpu", log=lines.append)
+    assert any("validation split holds only" in line for line in lines)  # 16 samples
     lines.clear()
     train(dataset, out, TrainSettings(epochs=1, augment="none"), device="cpu", log=lines.append)
+    assert lines[-1].startswith("max epochs after epoch 1")
+
+    state_path(out).write_bytes(state_path(out).read_bytes()[:100])  # a truncated state
+    with pytest.raises(TangleDrakeError, match=r"not a readable .*training state.*--restart"):
+        train(dataset, out, TrainSettings(epochs=1, augment="none"), device="cpu")
+    train(dataset, out, TrainSettings(epochs=1, augment="none"), device="cpu", restart=True,
+          log=lines.append)
     assert lines[-1].startswith("max epochs after epoch 1")
 
 

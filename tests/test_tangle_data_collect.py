@@ -257,3 +257,10 @@ def test_damaged_shards_are_skipped_by_readers_and_collected_again(uninterrupted
         assert repaired[task] == reference[task], f"task {task} differs"
     assert read_manifest(out)["counts"] == read_manifest(uninterrupted)["counts"] | {
         "cpu_s": read_manifest(out)["counts"]["cpu_s"]}
+
+
+def test_shards_are_readable_by_others_as_the_umask_allows(uninterrupted):
+    umask = os.umask(0)
+    os.umask(umask)
+    for path in uninterrupted.glob("shard_*.npz"):
+        assert path.stat().st_mode & 0o777 == 0o666 & ~umask, path

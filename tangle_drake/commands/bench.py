@@ -7,6 +7,7 @@ import shlex
 from pathlib import Path
 
 from tangle_drake.commands.scene import add_scenario_argument
+from tangle_drake.failures import FailureKind
 from tangle_drake.workers import add_worker_arguments
 
 
@@ -16,7 +17,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="For each part and trial, drop a fresh random pile, then let each method "
                     "pick once from that same pile with the physically simulated gripper, and "
                     "count what came up: exactly one part (success), several (tangled), none "
-                    "(empty), or failure (no candidate, unreachable, collision). Writes "
+                    f"(empty), or failure ({', '.join(kind.value for kind in FailureKind)}). "
+                    "Writes "
                     "report.md, CSV and JSON tables with 95 % confidence intervals, and PNG "
                     "plots into --out; run the same command again to resume.")
     parser.add_argument("--methods", nargs="+", default=None, metavar="METHOD",

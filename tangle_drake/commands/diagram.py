@@ -14,19 +14,26 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Write the station's system diagram as Graphviz: .dot as text, or .svg/.png "
                     "rendered with Graphviz's `dot` (apt-get install graphviz).")
     add_scenario_argument(parser)
-    parser.add_argument("--out", type=Path, default=Path("station.svg"),
-                        help="output file: .dot, .svg or .png (default: station.svg)")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="output file: .dot, .svg or .png (default: station.svg, or "
+                             "station.dot where Graphviz is not installed)")
     parser.add_argument("--depth", type=int, default=1,
                         help="how many levels of subdiagrams to expand (default: 1)")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from tangle_drake.graphviz import write_graphviz
+    from tangle_drake.graphviz import graphviz_installed, write_graphviz
     from tangle_drake.scenario_files import resolve_scenario
     from tangle_drake.station import build_station
 
+    out = args.out
+    if out is None:
+        out = Path("station.svg" if graphviz_installed() else "station.dot")
+        if out.suffix == ".dot":
+            print("Graphviz's `dot` is not installed, so the diagram is written as .dot text; "
+                  "install it (apt-get install graphviz) for station.svg")
     station = build_station(resolve_scenario(args.scenario))
-    write_graphviz(station.GetGraphvizString(max_depth=args.depth), args.out)
-    print(f"wrote {args.out}")
+    write_graphviz(station.GetGraphvizString(max_depth=args.depth), out)
+    print(f"wrote {out}")
     return 0

@@ -33,6 +33,7 @@ def run(args: argparse.Namespace) -> int:
     from tangle_drake.errors import TangleDrakeError
     from tangle_drake.pick.selection import resolve_tangle_choice, trained_model_path
     from tangle_drake.tangle_cnn.evaluate import evaluate_model
+    from tangle_drake.tangle_cnn.metrics import few_samples_warning
     from tangle_drake.tangle_cnn.model import load_tangle_model
 
     model_path = args.model
@@ -51,6 +52,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"note: the model was trained on {result.model_part}, the data is of "
               f"{result.data_part}", file=sys.stderr)
     print(_report(result, model_path))
+    if warning := few_samples_warning(result.tangled, result.samples - result.tangled,
+                                      f"the scored part of {args.data}"):
+        print(warning, file=sys.stderr)
     if args.json is not None:
         try:
             args.json.parent.mkdir(parents=True, exist_ok=True)

@@ -129,7 +129,9 @@ def read_image_file(path: str | Path) -> ImageFile:
         try:
             array = np.load(path, allow_pickle=False)
         except (ValueError, OSError, EOFError) as error:
-            raise TangleDrakeError(f"{path}: not a readable .npy array ({error})") from error
+            # numpy's message for a file that is no .npy advises unpickling it: never.
+            raise TangleDrakeError(f"{path}: not a readable .npy array (no .npy header, "
+                                   "truncated, or holding Python objects)") from error
     else:
         array = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
         if array is None:

@@ -57,7 +57,7 @@ def load_part(
     still not watertight (edges shared by three faces, say) has no volume to integrate: its
     mass properties then come from its convex hull at `density`, an upper bound (exact for a
     convex part, too heavy by the volume of its concavities otherwise). Either repair logs
-    a warning, on every load; CoACD may also take much longer (up to minutes) on such a mesh.
+    a warning, once per process; CoACD may also take much longer (up to minutes) on such a mesh.
     """
     scale = _positive("mesh_scale", mesh_scale)
     rho = STEEL_DENSITY if density is None else _positive("density", density)
@@ -140,6 +140,17 @@ def _load_mesh_file(path: Path, scale: float, density: float) -> PartModel:
         )
 
     entry, meta = cache.get_or_build(key, generate)
+    if key not in _WARNED:  # a command loads its part several times: say it once
+        _WARNED.add(key)
+        _warn_about_repairs(path, meta)
+    return _model(entry, meta)
+
+
+_WARNED: set[str] = set()
+"""Cache keys of the meshes whose repairs this process has warned about."""
+
+
+def _warn_about_repairs(path: Path, meta: dict[str, Any]) -> None:
     if meta["holes_capped"] and meta["mass_from"] == build.MASS_FROM_MESH:
         log.warning(
             "mesh file %s had %d holes; closed them with flat triangle fans, so its mass "
@@ -156,7 +167,6 @@ def _load_mesh_file(path: Path, scale: float, density: float) -> PartModel:
             path,
             meta["mass"],
         )
-    return _model(entry, meta)
 
 
 def _model(entry: Path, meta: dict[str, Any]) -> PartModel:

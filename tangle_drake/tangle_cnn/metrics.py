@@ -48,3 +48,17 @@ def binary_metrics(labels: np.ndarray, p_tangled: np.ndarray) -> dict[str, float
         "recall": true_positive / int(truth.sum()) if truth.any() else None,
         "auc": roc_auc(truth, p_tangled),
     }
+
+
+FEW_PER_CLASS = 30
+"""Below this many samples of a class, accuracy and ROC-AUC swing by tens of points from one
+split to the next (a handful of samples gives an AUC of 1.000 by luck)."""
+
+
+def few_samples_warning(tangled: int, untangled: int, what: str) -> str | None:
+    """A warning when ``what`` holds fewer than ``FEW_PER_CLASS`` samples of either class."""
+    if min(tangled, untangled) >= FEW_PER_CLASS:
+        return None
+    return (f"warning: {what} holds only {tangled} tangled and {untangled} untangled samples; "
+            f"with fewer than {FEW_PER_CLASS} of a class its accuracy and ROC-AUC are "
+            "unreliable (even 1.000 says little): collect more piles")

@@ -14,6 +14,7 @@ onnxruntime to check the result).
 from __future__ import annotations
 
 import json
+import logging
 import warnings
 from pathlib import Path
 
@@ -76,6 +77,9 @@ def export_onnx(model: TangleModel, out: Path) -> None:
     kind = _ProbabilityGraph if model.normalisation.target_mask is None else \
         _MaskedProbabilityGraph
     graph = kind(model.network, model.normalisation).eval()
+    exporter_log = logging.getLogger("torch.onnx")
+    level = exporter_log.level
+    exporter_log.setLevel(logging.ERROR)  # "torchvision is not installed. Skipping ..."
     try:
         with warnings.catch_warnings():  # torch-internal notices, nothing a user can act on
             warnings.filterwarnings("ignore", message=".*LeafSpec", category=FutureWarning)
@@ -87,6 +91,8 @@ def export_onnx(model: TangleModel, out: Path) -> None:
     except ImportError as error:
         raise TangleDrakeError(f"ONNX export needs the onnx extra ({error}): pip install "
                                "'tangle_drake[onnx]'") from None
+    finally:
+        exporter_log.setLevel(level)
     proto = program.model_proto
     metadata = {"tangle_drake.crop": json.dumps({"size_m": model.crop.size_m, "size_px": size}),
                 "tangle_drake.normalisation": json.dumps(model.normalisation.to_dict()),

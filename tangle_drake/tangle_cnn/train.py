@@ -40,7 +40,7 @@ from tangle_drake.tangle_cnn.checkpoint import (
     read_checkpoint,
     save_atomic,
 )
-from tangle_drake.tangle_cnn.metrics import binary_metrics
+from tangle_drake.tangle_cnn.metrics import binary_metrics, few_samples_warning
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION, Normalisation
 from tangle_drake.tangle_cnn.train_settings import AUGMENTATIONS, TrainSettings
@@ -110,6 +110,10 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
         f"{data.summary['piles']} piles; training on {len(data.train)} x "
         f"{AUGMENTATIONS[settings.augment]} (augment {settings.augment}), validating on "
         f"{len(data.validation)}; device {dev}")
+    tangled = int(data.labels[data.validation].sum())
+    if warning := few_samples_warning(tangled, len(data.validation) - tangled,
+                                      "the validation split"):
+        log(warning)
 
     while not (reason := _stop_reason(state, settings)):
         epoch = state["epoch"] + 1
@@ -147,7 +151,11 @@ def _stop_reason(state: dict, settings: TrainSettings) -> str | None:
 def _resumed_state(out: Path, fixed: dict, fingerprint: str) -> dict:
     """The saved training state, if it was made by the same settings on the same data."""
     path = state_path(out)
-    state = read_checkpoint(path, STATE_KIND)
+    try:
+        state = read_checkpoint(path, STATE_KIND)
+    except TangleDrakeError as error:
+        raise TangleDrakeError(f"{error}; pass --restart to train {out} from the start "
+                               "(the data is not touched)") from None
     saved = state["settings"]
     changed = [f"{group}.{key}" for group, values in fixed.items()
                for key, value in values.items()
