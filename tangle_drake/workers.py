@@ -93,6 +93,11 @@ def _run_in_process(task: Any) -> Any:
     return _WORKER.run_task(task)
 
 
+RAY_RETRIES = 3
+"""How often Ray restarts an actor whose process died (a node lost, a worker killed) and
+runs its task again; tasks are pure functions of their seeds, so a retry changes nothing."""
+
+
 class RayWorkers:
     """``count`` Ray actors on the cluster at ``address`` (``auto`` = the local cluster)."""
 
@@ -112,7 +117,8 @@ class RayWorkers:
         self.ray = ray
         cpus = int(ray.cluster_resources().get("CPU", 1))
         self.capacity = count or cpus
-        actor = ray.remote(num_cpus=1)(_RayWorker)
+        actor = ray.remote(num_cpus=1, max_restarts=RAY_RETRIES,
+                           max_task_retries=RAY_RETRIES)(_RayWorker)
         self.actors = [actor.remote(factory, tuple(args)) for _ in range(self.capacity)]
         self.idle = list(self.actors)
         self.busy: dict[Future, object] = {}
@@ -121,13 +127,28 @@ class RayWorkers:
         for done in [future for future in self.busy if future.done()]:
             self.idle.append(self.busy.pop(done))
         actor = self.idle.pop()
-        future = actor.run_task.remote(task).future()
+        future: Future = Future()
         self.busy[future] = actor
+        actor.run_task.remote(task).future().add_done_callback(
+            lambda ray_future: self._settle(future, ray_future, task))
         return future
+
+    def _settle(self, future: Future, ray_future: Future, task: Any) -> None:
+        """Pass the task's result or error on; an actor that kept dying becomes a clear
+        error (a task's own exception reaches the driver as its type, as locally)."""
+        error = ray_future.exception()
+        if isinstance(error, self.ray.exceptions.RayActorError):
+            error = TangleDrakeError(f"the Ray worker running task {task!r} died "
+                                     f"{RAY_RETRIES + 1} times (out of memory, or a node "
+                                     f"lost?): {str(error).splitlines()[0]}")
+        if error is None:
+            future.set_result(ray_future.result())
+        else:
+            future.set_exception(error)
 
     def close(self) -> None:
         for actor in self.actors:
-            self.ray.kill(actor)
+            self.ray.kill(actor, no_restart=True)
 
 
 class _RayWorker:
