@@ -26,6 +26,8 @@ class FailureKind(enum.Enum):
     """A grasp there came up empty before, and the pile there has not changed."""
     SAFETY_STOP = "safety stop"
     """The hardware station's safety supervisor stopped the robot during the pick."""
+    STALE_IMAGE = "stale image"
+    """Hardware: no camera image arrived after the arm's last motion (a frozen camera)."""
     TIMEOUT = "timeout"
     """The pick did not finish in the simulated time allowed."""
     GAVE_UP = "gave up"

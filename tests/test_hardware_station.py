@@ -203,6 +203,36 @@ def test_depth_arrives_in_metres_from_32f_and_16u(depth, channel_type, metres):
     assert (np.array(bus.out("camera.rgb_image").data) == 200).all()
 
 
+def test_image_time_is_when_a_new_image_arrived_and_a_frozen_one_does_not_advance_it():
+    bus = Bus()
+    assert bus.out("camera.image_time")[0] == -np.inf  # no image yet
+    rgba = np.full((HEIGHT, WIDTH, 4), 200, np.uint8)
+    depth = np.full((HEIGHT, WIDTH), 0.5, np.float32)
+
+    def send(stamp_us: int) -> None:
+        array = lcmt_image_array()
+        array.header.utime = stamp_us
+        array.images = [
+            _image(rgba, lcmt_image.PIXEL_FORMAT_RGBA, lcmt_image.CHANNEL_TYPE_UINT8),
+            _image(depth, lcmt_image.PIXEL_FORMAT_DEPTH, lcmt_image.CHANNEL_TYPE_FLOAT32)]
+        array.num_images = 2
+        bus.lcm.Publish("DRAKE_RGBD_CAMERA_IMAGES_camera", array.encode())
+
+    bus.advance(0.1)
+    send(1000)
+    bus.advance(0.02)
+    arrived = bus.out("camera.image_time")[0]
+    assert 0.1 <= arrived <= 0.12
+    for _ in range(3):  # a driver re-sending its last frame: the same stamp
+        bus.advance(0.1)
+        send(1000)
+    bus.advance(0.02)
+    assert bus.out("camera.image_time")[0] == arrived
+    send(2000)
+    bus.advance(0.02)
+    assert bus.time - 0.025 <= bus.out("camera.image_time")[0] <= bus.time
+
+
 def test_scenario_defaults_keep_lcm_in_process_and_bad_hardware_fields_are_named():
     scenario = parse_scenario("{}")
     assert scenario.lcm_buses["default"].lcm_url == "memq://"

@@ -84,11 +84,13 @@ class CountingCandidates(LeafSystem):
         super().__init__()
         self.candidates = candidates
         self.calls = 0
+        self.times: list[float] = []
         self.DeclareAbstractOutputPort("candidates", lambda: AbstractValue.Make([]), self._calc,
                                        {self.time_ticket()})
 
     def _calc(self, context, value) -> None:
         self.calls += 1
+        self.times.append(context.get_time())
         value.set_value(list(self.candidates))
 
 
@@ -101,8 +103,18 @@ class FaultWindow(LeafSystem):
             0, float(start <= context.get_time() < end)), {self.time_ticket()})
 
 
+class Camera(LeafSystem):
+    """``camera.image_time`` of a camera whose images arrive ``lag`` s late and that freezes
+    (sends no new image) from ``frozen_at`` s on."""
+
+    def __init__(self, lag: float = 0.0, frozen_at: float = np.inf) -> None:
+        super().__init__()
+        self.DeclareVectorOutputPort("image_time", 1, lambda context, out: out.SetAtIndex(
+            0, min(context.get_time(), frozen_at) - lag), {self.time_ticket()})
+
+
 def run(candidates, motion=None, width=0.003, lifted=None, scored=None, picks=2,
-        duration=30.0, fault=None):
+        duration=30.0, fault=None, camera=None):
     """Simulate the planner alone; returns (records, modes visited, gripper command on entering
     each mode, source)."""
     motion = motion or FakeMotion()
@@ -120,6 +132,9 @@ def run(candidates, motion=None, width=0.003, lifted=None, scored=None, picks=2,
     if fault is not None:
         window = builder.AddSystem(FaultWindow(*fault))
         builder.Connect(window.get_output_port(), planner.GetInputPort("safety.fault"))
+    if camera is not None:
+        builder.AddSystem(camera)
+        builder.Connect(camera.get_output_port(), planner.GetInputPort("camera.image_time"))
     if scored is not None:
         scores = builder.AddSystem(ConstantValueSource(AbstractValue.Make(scored)))
         builder.Connect(scores.get_output_port(), planner.GetInputPort("scored_candidates"))
@@ -171,6 +186,27 @@ def test_a_safety_fault_fails_the_pick_in_progress_and_the_planner_resumes_once_
     assert first.outcome is Outcome.FAILED and first.reason == "safety stop during approach"
     assert first.failure is FailureKind.SAFETY_STOP
     assert second.outcome is Outcome.ONE
+
+
+def test_a_frozen_camera_stops_the_planner_instead_of_driving_a_pick():
+    # The first look is at 0.3 s; the camera sends nothing new from 0.5 s on.
+    records, modes, _, source = run([candidate(0, 0.9)], lifted=1, picks=2,
+                                    camera=Camera(frozen_at=0.5))
+    assert modes == [*PICK_MODES, Mode.SETTLE, Mode.DONE]  # no look at the pile as it was
+    first, stale = records
+    assert first.outcome is Outcome.ONE and source.calls == 1
+    assert stale.failure is FailureKind.STALE_IMAGE and "camera frozen" in stale.reason
+
+
+def test_a_camera_that_lags_delays_the_look_until_its_image_shows_the_arm_stopped():
+    on_time, _, _, prompt = run([candidate(0, 0.9)], lifted=1, picks=2, camera=Camera())
+    late, _, _, lagging = run([candidate(0, 0.9)], lifted=1, picks=2, camera=Camera(lag=0.5))
+    assert [r.outcome for r in late] == [Outcome.ONE, Outcome.ONE]
+    assert [r.execution_s for r in late] == pytest.approx([r.execution_s for r in on_time])
+    # Each look waits for an image that arrived after the arm stopped: 0.5 s after, less the
+    # 0.3 s settle the wait overlaps, so each look is 0.2 s later than the one before it.
+    delays = np.diff([0.0, *lagging.times]) - np.diff([0.0, *prompt.times])
+    np.testing.assert_allclose(delays, 0.2, atol=0.021)
 
 
 def test_a_fault_while_idle_records_nothing_and_a_lasting_fault_stays_stopped():

@@ -19,7 +19,8 @@ from tangle_drake.station import build_station, camera_model
 STATION_PORTS = {
     "inputs": ["nextage.position", "gripper.position"],
     "outputs": ["nextage.position_measured", "nextage.state_measured", "gripper.state_measured",
-                "camera.rgb_image", "camera.depth_image", "wrist.force_torque"],
+                "camera.rgb_image", "camera.depth_image", "camera.image_time",
+                "wrist.force_torque"],
 }
 
 

@@ -1,10 +1,12 @@
 """The top camera, a scenario entry like the drivers: its pose, and every branch of it.
 
 Simulation: an ``RgbdSensor`` fixed in the world above the bin (``camera.rgb_image``,
-``camera.depth_image`` in metres, ``sim.camera.label_image``). Hardware station: one
+``camera.depth_image`` in metres, ``sim.camera.label_image``; ``camera.image_time`` is the
+time, as it renders on demand). Hardware station: one
 ``lcmt_image_array`` per frame with a colour and a depth image, on channel
 ``DRAKE_RGBD_CAMERA_IMAGES_{name}`` of the camera's ``lcm_bus`` (Drake's own convention),
-unpacked into the same two ports. Robot side: the simulated images sent every
+unpacked into the same two ports, and ``camera.image_time``: when the last image with a new
+stamp arrived. Robot side: the simulated images sent every
 ``hardware.camera_period`` in the scenario's ``hardware.depth_format``.
 """
 
@@ -27,7 +29,12 @@ from pydrake.systems.sensors import (
 from tangle_drake.camera import CameraIntrinsics, CameraModel, top_view_pose
 from tangle_drake.drivers.config import camera_channel
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.hardware.images import DepthToMillimetres, ImageArrayToImages
+from tangle_drake.hardware.images import (
+    DepthToMillimetres,
+    ImageArrayToImages,
+    ImageArrival,
+    SimulatedImageTime,
+)
 from tangle_drake.hardware.lcm_systems import add_checked_subscriber, add_publisher
 from tangle_drake.hardware.messages import check_image_array
 from tangle_drake.scenario import Scenario
@@ -82,6 +89,8 @@ def add_simulated(builder: DiagramBuilder, scene_graph: SceneGraph, scenario: Sc
     builder.ExportOutput(sensor.depth_image_32F_output_port(), f"{PORT_PREFIX}.depth_image")
     builder.ExportOutput(sensor.label_image_output_port(),
                          f"{sim_prefix}{PORT_PREFIX}.label_image")
+    clock = builder.AddNamedSystem(f"{PORT_PREFIX}.image_clock", SimulatedImageTime())
+    builder.ExportOutput(clock.get_output_port(), f"{PORT_PREFIX}.image_time")
 
 
 def add_interface(builder: DiagramBuilder, lcm: DrakeLcmInterface,
@@ -95,6 +104,10 @@ def add_interface(builder: DiagramBuilder, lcm: DrakeLcmInterface,
     builder.Connect(subscriber.get_output_port(), images.get_input_port())
     builder.ExportOutput(images.GetOutputPort("color_image"), f"{PORT_PREFIX}.rgb_image")
     builder.ExportOutput(images.GetOutputPort("depth_image"), f"{PORT_PREFIX}.depth_image")
+    arrival = builder.AddNamedSystem(f"{PORT_PREFIX}.arrival",
+                                     ImageArrival(scenario.hardware.command_period))
+    builder.Connect(subscriber.get_output_port(), arrival.get_input_port())
+    builder.ExportOutput(arrival.get_output_port(), f"{PORT_PREFIX}.image_time")
     return subscriber
 
 

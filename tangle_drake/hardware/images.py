@@ -88,6 +88,44 @@ class ImageArrayToImages(LeafSystem):
         value.set_value(image)
 
 
+class ImageArrival(LeafSystem):
+    """When (station time) the last image with a new stamp arrived: ``camera.image_time``.
+
+    Input ``received`` (the camera's checked :class:`Received` record); output ``image_time``
+    (1-vector, s; -inf before the first image). A driver that re-sends a frozen image keeps
+    its stamp (counted as a repeat, not taken), so the time stops advancing and the planner,
+    which looks only at an image that arrived after the arm's last motion, waits instead of
+    picking from the pile as it was. Checked every ``period`` s, and at initialization.
+    """
+
+    def __init__(self, period: float) -> None:
+        super().__init__()
+        self.DeclareAbstractInputPort("received", AbstractValue.Make(Received()))
+        self._state = self.DeclareDiscreteState(np.array([np.nan, -np.inf]))  # stamp, time
+        self.DeclareVectorOutputPort(
+            "image_time", 1,
+            lambda c, out: out.SetAtIndex(0, c.get_discrete_state(self._state).GetAtIndex(1)),
+            {self.discrete_state_ticket(self._state)})
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
+        self.DeclareInitializationDiscreteUpdateEvent(self._update)
+
+    def _update(self, context: Context, state) -> None:
+        stamp = self.get_input_port().Eval(context).stamp
+        seen = context.get_discrete_state(self._state).GetAtIndex(0)
+        if stamp is not None and stamp != seen:
+            state.get_mutable_vector(self._state).SetFromVector([stamp, context.get_time()])
+
+
+class SimulatedImageTime(LeafSystem):
+    """``camera.image_time`` of the simulated camera: it renders on demand, so always now."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.DeclareVectorOutputPort("image_time", 1,
+                                     lambda c, out: out.SetAtIndex(0, c.get_time()),
+                                     {self.time_ticket()})
+
+
 class DepthToMillimetres(LeafSystem):
     """32F metres in, 16U millimetres out (the hardware simulator's ``depth_format: 16U``)."""
 

@@ -194,6 +194,9 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
 
     for port in (motion.measured_port, "gripper.state_measured"):
         builder.Connect(station.GetOutputPort(port), planner.GetInputPort(port))
+    if station.HasOutputPort("camera.image_time"):  # a look waits for an image taken after
+        builder.Connect(station.GetOutputPort("camera.image_time"),  # the arm stopped
+                        planner.GetInputPort("camera.image_time"))
     for port in (motion.command_port, "gripper.position"):
         builder.Connect(planner.GetOutputPort(port), station.GetInputPort(port))
 

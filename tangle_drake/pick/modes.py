@@ -81,6 +81,11 @@ class PickSettings:
     candidate would come back, and fail again, until the pile there changes."""
     repeat_angle_deg: float = 20.0
     repeat_depth: float = 0.005
+    image_timeout: float = 1.0
+    """With the planner's ``image_time`` input connected: wait after ``settle_time`` this long
+    at most (s) for an image that arrived after the arm's last motion ended, then stop with
+    a ``STALE_IMAGE`` failure. An older image shows the pile as it was before the last pick:
+    a frozen camera must not drive a pick."""
     recovery: RecoverySettings | None = None
     """``None``: open loop (the paper's). Else weigh every lift and act on it."""
     record_crop: CropSpec | None = None
@@ -94,7 +99,7 @@ class PickSettings:
             raise ValueError("PickSettings.close_delay must be >= 0")
         for name in ("settle_time", "close_time", "check_time", "release_time",
                      "empty_width", "open_width", "update_period", "repeat_distance",
-                     "repeat_depth"):
+                     "repeat_depth", "image_timeout"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"PickSettings.{name} must be positive")
 

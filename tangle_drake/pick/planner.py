@@ -60,6 +60,9 @@ port                         dir    value
 ``safety.fault``             in     optional, hardware: 1 after the station's safety stop
 ``depth_image``              in     optional, with ``settings.record_crop``: the camera's
                                     depth image, cropped into each record
+``camera.image_time``        in     optional: when the camera's last image arrived
+                                    (station time); a look waits for one newer than the
+                                    arm's last motion
 ``{motion.command_port}``    out    the manipulator's command (``nextage.position``)
 ``gripper.position``         out    commanded opening, m
 ``payload.request``          out    what the ``PayloadEstimator`` should do now
@@ -128,6 +131,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
         self._fault = self.DeclareVectorInputPort("safety.fault", 1)
         self._depth = self.DeclareAbstractInputPort("depth_image",
                                                     AbstractValue.Make(ImageDepth32F()))
+        self._image_time = self.DeclareVectorInputPort("camera.image_time", 1)
         self._state = self.DeclareAbstractState(AbstractValue.Make(
             PlannerState(Mode.SETTLE, 0.0, np.zeros(motion.command_size),
                          self._settings.open_width)))
@@ -188,7 +192,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
         if fault or s.mode is Mode.STOPPED:
             return self._safety(context, s, fault)
         if s.mode is Mode.SETTLE and elapsed >= settings.settle_time:
-            return replace(s, mode=Mode.PERCEIVE, since=t)
+            return self._look(context, s, t)
         if s.mode is Mode.PERCEIVE:
             return self._perceive(context, s)
         if s.mode is Mode.PUT_BACK and (stopped := self._put_back(context, s)) is not s:
@@ -289,6 +293,23 @@ class PickPlanner(ClosedLoop, LeafSystem):
         return replace(s, mode=Mode.DONE if done else s.mode, since=t)
 
     # --- perceive, select, plan --------------------------------------------------------------
+
+    def _look(self, context: Context, s: PlannerState, t: float) -> PlannerState:
+        """PERCEIVE once the camera's last image arrived after SETTLE began (the arm's last
+        motion ended); wait for one, and past ``image_timeout`` stop: a STALE_IMAGE failure."""
+        if not self._image_time.HasValue(context):
+            return replace(s, mode=Mode.PERCEIVE, since=t)
+        arrived = float(self._image_time.Eval(context)[0])
+        if arrived >= s.since:
+            return replace(s, mode=Mode.PERCEIVE, since=t)
+        if t - s.since < self._settings.settle_time + self._settings.image_timeout:
+            return s
+        age = "no image yet" if arrived == -np.inf else \
+            f"the last one arrived at t={arrived:.2f} s"
+        record = PickRecord(index=len(s.picks) + 1, failure=FailureKind.STALE_IMAGE,
+                            reason=f"no camera image after the arm stopped at t={s.since:.2f} s "
+                                   f"({age}): is the camera frozen?")
+        return self._finish(s, record, t)
 
     def _perceive(self, context: Context, s: PlannerState) -> PlannerState:
         t = context.get_time()

@@ -18,6 +18,8 @@ port                            dir    meaning
 ``gripper.state_measured``      out    measured [width, width rate]
 ``camera.rgb_image``            out    top camera colour image
 ``camera.depth_image``          out    top camera depth, metres along the optical axis (32F)
+``camera.image_time``           out    when the last image was taken (simulation: now) or
+                                       arrived with a new stamp (hardware), station time, s
 =============================== ====== ====================================================
 
 Simulation-only ports, which no real robot has, start with ``sim.``: ``sim.plant_state``,
