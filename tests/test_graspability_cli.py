@@ -192,3 +192,27 @@ def test_a_height_map_deeper_than_any_bin_is_warned_about(tmp_path, capsys):
     _, _, err = run(capsys, tmp_path / "deep.png", "--height-per-level", 0.001,
                     "--pixel-size", 0.001)
     assert "span 60.00 m of height" in err
+
+
+def test_emap_adds_each_candidates_entanglement_and_the_map_under_the_overlay(
+        tmp_path, pile, capsys):
+    _, depth = pile
+    np.save(tmp_path / "pile.npy", depth)
+    save_camera_json(tmp_path / "camera.json", CameraModel(K, top_view_pose(np.zeros(3), FLOOR)))
+    heights = np.clip(255 * (FLOOR - depth) / 0.05, 0, 255).astype(np.uint8)
+    cv2.imwrite(str(tmp_path / "heights.png"), heights)  # brighter = higher, 8-bit
+    out_json, overlays = tmp_path / "grasps.json", tmp_path / "overlays"
+    args = ["--top-k", 3, "--json", out_json, "--overlay", overlays]
+    assert run(capsys, tmp_path / "pile.npy", *args)[0] == 0
+    plain = cv2.imread(str(overlays / "pile_grasps.png"))
+    code, out, err = run(capsys, tmp_path / "pile.npy", tmp_path / "heights.png", "--emap",
+                         "--height-per-level", 0.05 / 255, "--pixel-size", 0.001, *args)
+    assert code == 0, err
+    assert "entanglement map in" in out and "entanglement=" in out
+    for result in json.loads(out_json.read_text()):
+        assert result["emap_ms"] > 0
+        assert all(0.0 <= c["entanglement"] <= 1.0 for c in result["candidates"])
+    mapped = cv2.imread(str(overlays / "pile_grasps.png"))
+    assert plain is not None and mapped is not None and mapped.shape == plain.shape
+    assert (mapped != plain).any(axis=2).mean() > 0.3  # the map lies under the hands
+    assert (overlays / "heights_grasps.png").is_file()

@@ -81,7 +81,7 @@ def test_random_draws_among_the_top_five_from_the_seed_and_the_candidates():
 
 def test_only_the_cnn_rules_need_the_model():
     assert [rule for rule in RULES if needs_model(rule)] == list(MODEL_RULES) == [
-        "cnn", "harmonic"]
+        "cnn", "harmonic", "emap-harmonic"]
     for rule in MODEL_RULES:
         with pytest.raises(ValueError, match="needs P"):
             rank(rule, GRASPABILITY)
@@ -98,9 +98,23 @@ def test_rank_candidates_orders_the_candidates_themselves():
 
 @pytest.mark.parametrize("rule", RULES)
 def test_no_candidates_rank_nothing(rule):
-    ranking = rank(rule, np.zeros(0), np.zeros(0), np.zeros((0, 3)))
+    ranking = rank(rule, np.zeros(0), np.zeros(0), np.zeros((0, 3)), entanglement=np.zeros(0))
     assert ranking.order.shape == (0,) and ranking.scores.shape == (0,)
-    assert rank_candidates(rule, [], np.zeros(0)) == []
+    assert rank_candidates(rule, [], np.zeros(0), entanglement=np.zeros(0)) == []
+
+
+def test_the_emap_rules_prefer_calm_places_and_fuse_all_three_terms():
+    entanglement = np.array([0.9, 0.0, 0.5, 1.0])
+    emap = rank("emap", GRASPABILITY, entanglement=entanglement)
+    g = GRASPABILITY / GRASPABILITY.max()
+    np.testing.assert_allclose(emap.scores, g * (1 - entanglement))
+    assert emap.order[-1] == 3  # the most entangled place in view scores 0
+    fused = rank("emap-harmonic", GRASPABILITY, P_NOT_TANGLED, entanglement=entanglement)
+    expected = 3 / (1 / g + 1 / P_NOT_TANGLED + 1 / np.maximum(1 - entanglement, 1e-300))
+    expected[3] = 0.0
+    np.testing.assert_allclose(fused.scores, expected)
+    with pytest.raises(ValueError, match="entanglement"):
+        rank("emap", GRASPABILITY)
 
 
 def test_bad_arguments():

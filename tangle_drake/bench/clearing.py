@@ -27,7 +27,7 @@ from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler
 from tangle_drake.planning.motions import motion_for
-from tangle_drake.station import build_station, camera_model
+from tangle_drake.station import build_station
 
 SIM_TIME_PER_PART = 40.0
 """Simulated seconds allowed per part in the pile before a clearing is stopped, s."""
@@ -75,8 +75,7 @@ class ClearWorker:
             pick = build_pick_diagram(
                 scenario, TangleChoice(None, FALLBACK_RULE), motion_for(scenario),
                 station=build_station(scenario), settings=settings,
-                selection=selection_wiring(methods, spec.name,
-                                           camera_model(scenario).intrinsics))
+                selection=selection_wiring(methods, spec.name, scenario))
             self._rigs[spec.name] = _Rig(PileSettler(build_station(scenario), scenario),
                                          PickEpisode(pick), scenario,
                                          {m.name: m for m in methods})

@@ -9,6 +9,9 @@ method              the candidate tried first
 ``cnn``             the highest P(not tangled) from the part's tangle CNN
 ``harmonic``        the paper's harmonic mean of the two, with the part's tangle CNN
 ``model:PATH``      the harmonic mean with the checkpoint at PATH (any part of the run)
+``emap``            Zhang et al. 2021: graspability re-ranked by low entanglement (the
+                    topological entanglement map, no training)
+``emap-harmonic``   the harmonic mean of graspability, P(not tangled) and 1 - entanglement
 =================== ========================================================================
 
 The rules, what ``random`` draws from and the order the planner tries candidates in are
@@ -31,13 +34,17 @@ from typing import Any, NamedTuple
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem, OutputPort
 
-from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.bin_model import inner_corners
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.graspability.roi import bin_roi
 from tangle_drake.pick.selection import trained_model_path
-from tangle_drake.tangle_cnn.selection import RULES, needs_model, rank_candidates
+from tangle_drake.scenario import Scenario
+from tangle_drake.station import camera_model
+from tangle_drake.tangle_cnn.selection import RULES, needs_emap, needs_model, rank_candidates
 
-DEFAULT_METHODS = RULES
-"""Every selection rule is a method, under its own name."""
+DEFAULT_METHODS = ("random", "graspability", "cnn", "harmonic")
+"""The methods a run compares unless told otherwise (every rule is a method, under its own
+name; the ``emap`` ones on request)."""
 MODEL_PREFIX = "model:"
 
 
@@ -54,6 +61,11 @@ class Method:
     @property
     def needs_model(self) -> bool:
         return needs_model(self.rule)
+
+    @property
+    def scored_outside(self) -> bool:
+        """Whether a system of its own scores the candidates (a CNN, the entanglement map)."""
+        return needs_model(self.rule) or needs_emap(self.rule)
 
     def model_for(self, part: str) -> Path:
         """The checkpoint this method uses on ``part`` (which may not exist)."""
@@ -95,7 +107,7 @@ class MethodSelector(LeafSystem):
     runs for the CNN methods only.
     """
 
-    def __init__(self, cnn_methods: Sequence[str]) -> None:
+    def __init__(self, scored_outside: Sequence[str]) -> None:
         super().__init__()
         self._candidates = self.DeclareAbstractInputPort("candidates", AbstractValue.Make([]))
         self._method = self.DeclareAbstractInputPort(
@@ -104,7 +116,7 @@ class MethodSelector(LeafSystem):
                                                           AbstractValue.Make([])),
                             self.DeclareAbstractInputPort(f"{name}.selected_grasp",
                                                           AbstractValue.Make(None)))
-                     for name in cnn_methods}
+                     for name in scored_outside}
         self.DeclareAbstractOutputPort("scored_candidates", lambda: AbstractValue.Make([]),
                                        self._calc_scored)
         self.DeclareAbstractOutputPort("selected_grasp", lambda: AbstractValue.Make(None),
@@ -128,33 +140,46 @@ class MethodSelector(LeafSystem):
             value.set_value(scored[0].candidate if scored else None)
 
 
-def selection_wiring(methods: Sequence[Method], part: str, intrinsics: CameraIntrinsics):
-    """A ``build_pick_diagram`` selection: a ``TangleCnnSystem`` per CNN method (models
-    loaded once each) into a :class:`MethodSelector`, whose ``method`` input is exported as
-    ``method``."""
+def selection_wiring(methods: Sequence[Method], part: str, scenario: Scenario):
+    """A ``build_pick_diagram`` selection: a ``TangleCnnSystem`` per CNN method and an
+    ``EntanglementMapSystem`` per ``emap`` method (over the bin's region of ``scenario``'s
+    camera; models loaded once each) into a :class:`MethodSelector`, whose ``method`` input
+    is exported as ``method``."""
+    camera = camera_model(scenario)
+    intrinsics = camera.intrinsics
+    roi = bin_roi(camera, inner_corners(scenario.bin))
 
     def wire(builder: DiagramBuilder, depth: OutputPort,
              candidates: OutputPort) -> tuple[OutputPort, OutputPort]:
-        cnn_methods = [m for m in methods if m.needs_model]
+        outside = [m for m in methods if m.scored_outside]
         selector = builder.AddNamedSystem("method_selector",
-                                          MethodSelector([m.name for m in cnn_methods]))
+                                          MethodSelector([m.name for m in outside]))
         builder.Connect(candidates, selector.GetInputPort("candidates"))
         builder.ExportInput(selector.GetInputPort("method"), "method")
-        if cnn_methods:
-            from tangle_drake.tangle_cnn.model import load_tangle_model  # imports torch
-            from tangle_drake.tangle_cnn.system import TangleCnnSystem
+        models: dict[Path, Any] = {}
+        for method in outside:
+            model = None
+            if method.needs_model:
+                from tangle_drake.tangle_cnn.model import load_tangle_model  # imports torch
 
-            models: dict[Path, Any] = {}
-            for method in cnn_methods:
                 path = method.model_for(part)
                 model = models.setdefault(path, load_tangle_model(path))
+            if needs_emap(method.rule):
+                from tangle_drake.entanglement.system import add_emap_selection
+
+                ports = add_emap_selection(builder, f"entanglement_map ({method.name})", depth,
+                                           candidates, intrinsics, roi, method.rule, model)
+            else:
+                from tangle_drake.tangle_cnn.system import TangleCnnSystem
+
                 cnn = builder.AddNamedSystem(f"tangle_cnn ({method.name})",
                                              TangleCnnSystem(model, intrinsics, method.rule))
                 builder.Connect(depth, cnn.GetInputPort("depth_image"))
                 builder.Connect(candidates, cnn.GetInputPort("candidates"))
-                for port in ("scored_candidates", "selected_grasp"):
-                    builder.Connect(cnn.GetOutputPort(port),
-                                    selector.GetInputPort(f"{method.name}.{port}"))
+                ports = (cnn.GetOutputPort("scored_candidates"),
+                         cnn.GetOutputPort("selected_grasp"))
+            for port, source in zip(("scored_candidates", "selected_grasp"), ports, strict=True):
+                builder.Connect(source, selector.GetInputPort(f"{method.name}.{port}"))
         return selector.GetOutputPort("scored_candidates"), selector.GetOutputPort(
             "selected_grasp")
 

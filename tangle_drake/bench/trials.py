@@ -33,7 +33,7 @@ from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
-from tangle_drake.station import build_station, camera_model
+from tangle_drake.station import build_station
 
 MODE_SCENARIOS = {"floating": "floating_gripper.yaml", "arm": "pick_demo.yaml"}
 """The shipped scenario of each ``--mode``: the gripper on the gantry, or on the Nextage."""
@@ -189,7 +189,7 @@ class TrialWorker:
             scenario, TangleChoice(None, FALLBACK_RULE),
             motion_for(scenario, return_home=not floating), station=build_station(scenario),
             settings=settings,
-            selection=selection_wiring(methods, spec.name, camera_model(scenario).intrinsics))
+            selection=selection_wiring(methods, spec.name, scenario))
         return _Rig(PileSettler(build_station(scenario), scenario), PickEpisode(pick),
                     FLOATING_SIM_LIMIT if floating else SIM_TIME_PER_PICK,
                     settings.update_period, {m.name: m for m in methods})

@@ -31,7 +31,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="pile seed (default: the scenario's pile.seed)")
     parser.add_argument("--rule", choices=RULES, default=None,
                         help="selection rule (default: harmonic with a model, else "
-                             "graspability)")
+                             "graspability); emap and emap-harmonic add the topological "
+                             "entanglement map (Zhang et al. 2021)")
     parser.add_argument("--model", type=Path, default=None,
                         help="tangle CNN checkpoint (default: tangle_drake/trained/<part>.pt)")
     parser.add_argument("--meshcat", action="store_true",

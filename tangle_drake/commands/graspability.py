@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 
 from tangle_drake.camera import CameraModel, load_camera_json
+from tangle_drake.entanglement.emap import entanglement_map
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import (
     FINGER_GRIP_SPAN_M,
@@ -36,7 +37,7 @@ from tangle_drake.graspability.inputs import (
     millimetres_to_depth,
     read_image_file,
 )
-from tangle_drake.graspability.overlay import depth_preview, draw_candidates
+from tangle_drake.graspability.overlay import depth_preview, draw_candidates, emap_underlay
 from tangle_drake.graspability.workmap import View
 from tangle_drake.gripper import DEFAULT_GRIPPER
 
@@ -72,6 +73,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--json", type=Path, metavar="OUT", help="write the results here")
     parser.add_argument("--overlay", type=Path, metavar="DIR",
                         help="write a PNG per image with the candidates' hands drawn")
+    parser.add_argument("--emap", action="store_true",
+                        help="also compute the topological entanglement map (Zhang et al. "
+                             "2021) over the --roi: each candidate's entanglement (0-1) in "
+                             "the printout and JSON, and the map under the overlay's hands")
     parser.set_defaults(func=run)
 
 
@@ -97,8 +102,11 @@ def run(args: argparse.Namespace) -> int:
             print(f"error: {error}", file=sys.stderr)
             results.append({"image": str(path), "error": str(error)})
             continue
-        _print_summary(path, entry["compute_ms"], entry["candidates"])
-        entry["candidates"] = [candidate.to_dict() for candidate in entry["candidates"]]
+        _print_summary(path, entry)
+        entanglement = entry.pop("entanglement", [None] * len(entry["candidates"]))
+        entry["candidates"] = [candidate.to_dict() | ({} if e is None else {"entanglement": e})
+                               for candidate, e in zip(entry["candidates"], entanglement,
+                                                       strict=True)]
         results.append(entry)
     if args.json is not None:
         args.json.parent.mkdir(parents=True, exist_ok=True)
@@ -143,6 +151,15 @@ def _process(path: Path, args: argparse.Namespace, hand: HandModel,
         view = View.of_height_map(image.array.shape[:2], args.pixel_size)
     entry = {"image": str(path), "compute_ms": round(elapsed * 1e3, 3),
              "candidates": candidates}
+    if args.emap:
+        depth = image.array if image.is_depth else height_map_to_depth(image.array,
+                                                                       args.height_per_level)
+        start = time.perf_counter()
+        emap = entanglement_map(depth, roi)
+        entry["emap_ms"] = round((time.perf_counter() - start) * 1e3, 3)
+        entry["entanglement"] = emap.at([c.u for c in candidates],
+                                        [c.v for c in candidates]).round(4).tolist()
+        picture = emap_underlay(picture, emap.image())
     return entry, picture, view
 
 
@@ -166,15 +183,19 @@ def _camera_for(path: Path, given: Path | None, cameras: dict[Path, CameraModel]
     return cameras[source]
 
 
-def _print_summary(path: Path, compute_ms: float, candidates: list[GraspCandidate]) -> None:
-    print(f"{path}: {len(candidates)} candidate(s) in {compute_ms:.1f} ms")
-    for rank, c in enumerate(candidates, 1):
+def _print_summary(path: Path, entry: dict) -> None:
+    candidates: list[GraspCandidate] = entry["candidates"]
+    emap = f", entanglement map in {entry['emap_ms']:.1f} ms" if "emap_ms" in entry else ""
+    print(f"{path}: {len(candidates)} candidate(s) in {entry['compute_ms']:.1f} ms{emap}")
+    entanglement = entry.get("entanglement", [None] * len(candidates))
+    for rank, (c, e) in enumerate(zip(candidates, entanglement, strict=True), 1):
         where = "" if c.pose is None else (
             "  T_W=({:+.3f}, {:+.3f}, {:+.3f}) m".format(*c.pose[:3, 3]))
         if c.height_m is not None:
             where = f"  tips {c.height_m:.4f} m high"
+        tangle = "" if e is None else f"  entanglement={e:.2f}"
         print(f"  #{rank}  u={c.u:7.1f} v={c.v:7.1f}  angle={c.angle_deg:6.2f} deg  "
-              f"depth={c.depth_m:.4f} m  score={c.score:.3f}{where}")
+              f"depth={c.depth_m:.4f} m  score={c.score:.3f}{tangle}{where}")
 
 
 def _write_overlay(directory: Path, path: Path, picture: np.ndarray,

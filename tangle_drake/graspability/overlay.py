@@ -33,6 +33,14 @@ def depth_preview(depth: np.ndarray) -> np.ndarray:
     return cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR)
 
 
+def emap_underlay(picture: np.ndarray, emap: np.ndarray) -> np.ndarray:
+    """``picture`` (BGR) half covered by the entanglement map (0-1, the image's size) in
+    colour, blue = calm to red = entangled, where the map is defined (non-zero)."""
+    colour = cv2.applyColorMap(np.clip(255 * emap, 0, 255).astype(np.uint8), cv2.COLORMAP_JET)
+    blended = cv2.addWeighted(picture, 0.5, colour, 0.5, 0.0)
+    return np.where((emap > 0)[..., None], blended, picture)
+
+
 def draw_candidates(picture: np.ndarray, candidates: list[GraspCandidate], hand: HandModel,
                     view: View) -> np.ndarray:
     """``picture`` (BGR, the image's size) with each candidate's hand drawn on a copy."""

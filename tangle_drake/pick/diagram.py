@@ -23,6 +23,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 from tangle_drake.bin_model import inner_corners
 from tangle_drake.camera import CameraModel
 from tangle_drake.drivers.parallel_jaw import empty_grasp_width
+from tangle_drake.entanglement.system import add_emap_selection
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import FINGER_GRIP_SPAN_M, GraspabilityParams, bin_roi
 from tangle_drake.graspability.system import GraspabilitySystem
@@ -38,6 +39,7 @@ from tangle_drake.pick.selection import RuleSelector, TangleChoice
 from tangle_drake.planning.motion import Motion
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
 from tangle_drake.station import SimulatedStation, build_station, camera_model
+from tangle_drake.tangle_cnn.selection import needs_emap
 
 WRIST = "wrist"
 """The force/torque sensor the closed loop weighs with (``force_torque_sensors.wrist``)."""
@@ -174,6 +176,12 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
     builder.Connect(graspability.GetOutputPort("candidates"), planner.GetInputPort("candidates"))
     if selection is not None:
         scored, selected = selection(builder, depth, graspability.GetOutputPort("candidates"))
+        builder.Connect(scored, planner.GetInputPort("scored_candidates"))
+        builder.Connect(selected, planner.GetInputPort("selected_grasp"))
+    elif needs_emap(choice.rule):
+        scored, selected = add_emap_selection(
+            builder, "entanglement_map", depth, graspability.GetOutputPort("candidates"),
+            camera.intrinsics, roi, choice.rule, choice.model)
         builder.Connect(scored, planner.GetInputPort("scored_candidates"))
         builder.Connect(selected, planner.GetInputPort("selected_grasp"))
     elif choice.model is not None:

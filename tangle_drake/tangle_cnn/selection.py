@@ -14,12 +14,18 @@ Rules (``RULES``), over the candidates of one image (graspability's top-k, best 
   and both terms lie in [0, 1] whatever the index's absolute scale. A zero in either term
   gives 0 (a grasp that cannot close or surely tangles is never preferred); all-zero scores
   give ``g = 0`` for all.
+- ``emap`` (Zhang et al. 2021, training-free): the highest ``g (1 - e)``, ``e`` the
+  entanglement map at the candidate (:mod:`tangle_drake.entanglement`, 1 at the most
+  entangled place in view): graspability's candidates re-ranked by low entanglement;
+- ``emap-harmonic``: the highest harmonic mean ``3 / (1/g + 1/p + 1/(1 - e))`` of the three
+  (0 when any is 0).
 
 :func:`rank` orders every candidate, best first, which is the order the planner tries them
 in: by the rule's score; ties go to the candidate that is better on the other term
 (P(not tangled) for ``graspability``, where known, graspability for ``cnn`` and ``harmonic``),
 then to the earlier one. After ``random``'s draw come the others in graspability's order.
-Only ``cnn`` and ``harmonic`` need the tangle CNN (:data:`MODEL_RULES`). Numpy only.
+``cnn``, ``harmonic`` and ``emap-harmonic`` need the tangle CNN (:data:`MODEL_RULES`), the
+``emap`` rules the entanglement map (:data:`EMAP_RULES`). Numpy only.
 """
 
 from __future__ import annotations
@@ -32,9 +38,11 @@ import numpy as np
 
 from tangle_drake.errors import TangleDrakeError
 
-RULES = ("random", "graspability", "cnn", "harmonic")
-MODEL_RULES = ("cnn", "harmonic")
+RULES = ("random", "graspability", "cnn", "harmonic", "emap", "emap-harmonic")
+MODEL_RULES = ("cnn", "harmonic", "emap-harmonic")
 """The rules that need P(not tangled), hence a trained tangle CNN."""
+EMAP_RULES = ("emap", "emap-harmonic")
+"""The rules that need each candidate's entanglement (the entanglement map)."""
 RANDOM_TOP_K = 5
 """``random`` draws among this many of graspability's best candidates."""
 
@@ -68,6 +76,11 @@ def needs_model(rule: str) -> bool:
     return check_rule(rule) in MODEL_RULES
 
 
+def needs_emap(rule: str) -> bool:
+    """Whether ``rule`` needs each candidate's entanglement."""
+    return check_rule(rule) in EMAP_RULES
+
+
 def normalised_graspability(scores: np.ndarray) -> np.ndarray:
     """Scores divided by the best of them (all zeros when the best is not positive)."""
     best = scores.max(initial=0.0)
@@ -85,13 +98,15 @@ def random_draw(poses: np.ndarray, seed: int) -> int | None:
 
 
 def rank(rule: str, graspability: np.ndarray, p_not_tangled: np.ndarray | None = None,
-         poses: np.ndarray | None = None, seed: int = 0) -> Ranking:
+         poses: np.ndarray | None = None, seed: int = 0,
+         entanglement: np.ndarray | None = None) -> Ranking:
     """Every candidate in the order ``rule`` prefers them, and their combined scores.
 
     ``graspability`` (N,) are non-negative index scores in the candidates' order (best
     first), ``p_not_tangled`` (N,) the CNN's probabilities (``None`` without a CNN: only
-    ``random`` and ``graspability`` then), ``poses`` (N, 3) the candidates' u, v and angle
-    and ``seed`` the draw of ``random``.
+    ``random``, ``graspability`` and ``emap`` then), ``poses`` (N, 3) the candidates' u, v and
+    angle, ``seed`` the draw of ``random`` and ``entanglement`` (N,) the map's values in
+    [0, 1] at the candidates (the ``emap`` rules only).
     """
     check_rule(rule)
     g = np.asarray(graspability, dtype=np.float64)
@@ -114,12 +129,24 @@ def rank(rule: str, graspability: np.ndarray, p_not_tangled: np.ndarray | None =
         scores, other = g, p
     elif rule == "cnn":
         scores, other = p, g
+    elif rule == "harmonic":
+        scores, other = harmonic_mean(normalised_graspability(g), p), g
     else:
+        if entanglement is None or np.shape(entanglement) != g.shape:
+            raise ValueError(f"the {rule} rule needs each candidate's entanglement")
+        calm = 1.0 - np.clip(np.asarray(entanglement, dtype=np.float64), 0.0, 1.0)
         g_norm = normalised_graspability(g)
-        total = g_norm + p
-        scores = np.divide(2 * g_norm * p, total, out=np.zeros_like(total), where=total > 0)
+        scores = g_norm * calm if rule == "emap" else harmonic_mean(g_norm, p, calm)
         other = g
     return Ranking(_order(scores, other), scores)
+
+
+def harmonic_mean(*terms: np.ndarray) -> np.ndarray:
+    """The element-wise harmonic mean of non-negative ``terms``; 0 where any is 0."""
+    stacked = np.stack(terms)
+    positive = (stacked > 0).all(axis=0)
+    inverse = np.divide(1.0, stacked, out=np.zeros_like(stacked), where=stacked > 0).sum(0)
+    return np.divide(len(terms), inverse, out=np.zeros_like(inverse), where=positive)
 
 
 def _order(scores: np.ndarray, other: np.ndarray) -> np.ndarray:
@@ -139,12 +166,14 @@ def _random(g: np.ndarray, p: np.ndarray, poses: np.ndarray, seed: int) -> Ranki
 
 def rank_candidates(rule: str, candidates: Sequence[Any],
                     p_not_tangled: np.ndarray | None = None,
-                    seed: int = 0) -> list[ScoredCandidate]:
+                    seed: int = 0, entanglement: np.ndarray | None = None
+                    ) -> list[ScoredCandidate]:
     """``candidates`` (with ``score``, ``u``, ``v``, ``angle_deg``) as :func:`rank` orders
     them, best first, each with its P(not tangled) and combined score."""
     g = np.array([c.score for c in candidates], dtype=np.float64)
     poses = np.array([(c.u, c.v, c.angle_deg) for c in candidates], dtype=np.float64)
-    ranking = rank(rule, g, p_not_tangled, poses.reshape(len(candidates), 3), seed)
+    ranking = rank(rule, g, p_not_tangled, poses.reshape(len(candidates), 3), seed,
+                   entanglement)
     return [ScoredCandidate(candidates[i],
                             None if p_not_tangled is None else float(p_not_tangled[i]),
                             float(ranking.scores[i])) for i in ranking.order]
