@@ -5,6 +5,7 @@ are refused by the robot side."""
 
 import re
 
+import cv2
 import numpy as np
 import pytest
 from cli_run import run_command
@@ -212,7 +213,8 @@ def test_the_closed_loop_weighs_over_lcm_with_the_same_diagram(tmp_path):
     scenario.pile.parts[0].count = 4
     records = run_demo(DemoOptions(picks=1, scenario=scenario, rule="graspability", seed=1,
                                    hardware=True, with_hardware_sim=True,
-                                   log_picks=tmp_path / "log"), lambda _: None)
+                                   log_picks=tmp_path / "log", pictures=tmp_path / "pictures"),
+                       lambda _: None)
     assert all(r.lifted is None for r in records)  # no simulation-only count
     assert records[-1].disposition is Disposition.DELIVERED, [r.describe() for r in records]
     assert records[-1].estimate.count == 1 and records[-1].outcome.value == "one part"
@@ -221,6 +223,12 @@ def test_the_closed_loop_weighs_over_lcm_with_the_same_diagram(tmp_path):
     assert len(logged["label"]) == len(weighed) >= 1
     assert logged["outcome"][-1] == 1 and logged["label"][-1] == 0  # weighed one: not tangled
     assert (logged["sim_lifted"] == -1).all()  # hardware: no simulation count
+    # Its picture: no side view on hardware, the wrist's weighing in words instead.
+    picture = cv2.imread(str(tmp_path / "pictures" / f"pick_{records[-1].index:03d}.png"))
+    width = scenario.camera.width
+    assert picture is not None and picture[:, :width].std() > 10
+    panel = picture[:scenario.camera.height, width:]
+    assert (panel.max(axis=2) > 0).mean() < 0.05  # text on black, not a rendered scene
 
 
 @pytest.mark.parametrize("carrier", ["nextage", "gantry"])

@@ -54,6 +54,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "its label: several = tangled) to this pick log, a dataset that "
                              "`tangle-drake train` and `evaluate` read; runs add to it, on "
                              "hardware too")
+    parser.add_argument("--pictures", type=Path, default=None, metavar="DIR",
+                        help="write a picture of each pick into DIR (pick_001.png, ...): the "
+                             "top view with the ranked candidates and their scores, the "
+                             "chosen one marked, the side view at the top of the lift with "
+                             "the outcome, and the CNN's crop and target mask")
     parser.add_argument("--with-hardware-sim", action="store_true",
                         help="with --hardware: run the hardware simulator in this process, "
                              "both sides over memq:// (nothing leaves the process)")
@@ -68,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
         rule=args.rule, model=args.model, meshcat=args.meshcat, record=args.record,
         diagram=args.diagram, hardware=args.hardware,
         with_hardware_sim=args.with_hardware_sim, open_loop=args.open_loop,
-        log_picks=args.log_picks))
+        log_picks=args.log_picks, pictures=args.pictures))
     if args.meshcat and sys.stdin.isatty():
         input("Meshcat stays up until you press Enter.")
     return 0

@@ -33,6 +33,7 @@ from tangle_drake.pick.diagram import (
 from tangle_drake.pick.episode import Clock, PickEpisode, PickRun, RunEnd, run_picks
 from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.pick_log import PickLog, pick_log_identity
+from tangle_drake.pick.pictures import PickPictures
 from tangle_drake.pick.planner import PickSettings
 from tangle_drake.pick.selection import TangleChoice, model_part_notice, resolve_tangle_choice
 from tangle_drake.pile import check_pile, settle_pile
@@ -40,7 +41,7 @@ from tangle_drake.planning.motion import Motion
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario
 from tangle_drake.scenario_files import resolve_scenario
-from tangle_drake.station import SimulatedStation, build_station
+from tangle_drake.station import SimulatedStation, build_station, camera_model
 from tangle_drake.tangle_cnn.model import load_tangle_model
 
 RECORD_FPS = 20.0
@@ -75,6 +76,8 @@ class DemoOptions:
     deliveries)."""
     log_picks: Path | None = None
     """Append every weighed grasp to this pick log (``tangle_drake.pick.pick_log``)."""
+    pictures: Path | None = None
+    """Write a picture of each pick into this directory (``tangle_drake.pick.pictures``)."""
 
 
 def with_part(scenario: Scenario, part: str | None) -> Scenario:
@@ -118,15 +121,21 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     motion = motion_for(scenario)  # before any long work: the scenario must have a robot
     settings = pick_settings(scenario, max_picks=options.picks) if options.open_loop \
         else closed_loop_settings(scenario, max_picks=options.picks)
-    if options.log_picks is None:
+    if options.log_picks is None and options.pictures is None:
         return _run_demo(options, scenario, choice, settings, motion, say, None)
-    crop = load_tangle_model(choice.model).crop if choice.model else CropSpec.for_gripper()
+    model = load_tangle_model(choice.model) if choice.model else None
+    crop = model.crop if model is not None else CropSpec.for_gripper()
+    settings = replace(settings, record_crop=crop, record_view=options.pictures is not None)
+    pictures = None if options.pictures is None else PickPictures(
+        options.pictures, camera_model(scenario).intrinsics,
+        model.normalisation if model is not None else None)
+    if options.log_picks is None:
+        return _run_demo(options, scenario, choice, settings, motion, say, None, pictures)
     log = PickLog(options.log_picks, pick_log_identity(part, crop, DEFAULT_GRIPPER))
     for notice in log.notices:
         say(f"notice: {notice}")
     try:
-        return _run_demo(options, scenario, choice, replace(settings, record_crop=crop),
-                         motion, say, log)
+        return _run_demo(options, scenario, choice, settings, motion, say, log, pictures)
     finally:
         log.close()
         say(f"pick log {log.directory}: {log.logged} grasp(s) added"
@@ -135,9 +144,9 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
 
 def _run_demo(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
               settings: PickSettings, motion: Motion, say: Callable[[str], None],
-              log: PickLog | None) -> list[PickRecord]:
+              log: PickLog | None, pictures: PickPictures | None = None) -> list[PickRecord]:
     if options.hardware:
-        return _run_hardware(options, scenario, choice, settings, motion, say, log)
+        return _run_hardware(options, scenario, choice, settings, motion, say, log, pictures)
 
     meshcat = None
     if options.meshcat or options.record:
@@ -162,8 +171,10 @@ def _run_demo(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
     if meshcat is not None and options.record:
         meshcat.StartRecording(RECORD_FPS, set_visualizations_while_recording=options.meshcat)
     in_bin = _bin_count(pick, episode.simulator, scenario, scenario.pile.total_count)
+    if pictures is not None and scenario.view_cameras:
+        pictures.watch(episode.simulator, pick, scenario.view_cameras[0])
     records = _run(episode.simulator, pick, options.picks, say, in_bin,
-                   closed=settings.recovery is not None, log=log)
+                   closed=settings.recovery is not None, log=log, pictures=pictures)
     if meshcat is not None and options.record:
         meshcat.StopRecording()
         meshcat.PublishRecording()
@@ -176,7 +187,7 @@ def _run_demo(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
 
 def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
                   settings: PickSettings, motion: Motion, say: Callable[[str], None],
-                  log: PickLog | None) -> list[PickRecord]:
+                  log: PickLog | None, pictures: PickPictures | None) -> list[PickRecord]:
     """The same pick diagram around the hardware station: against the hardware simulator in
     this process over ``memq://`` (``--with-hardware-sim``), or against the robot's drivers on
     the scenario's LCM bus, in real time."""
@@ -198,7 +209,7 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
         if log is not None:
             log.pile_seed = robot.pile.seed
         records = _run(loop, built[0], options.picks, say, in_bin,
-                       closed=settings.recovery is not None, log=log)
+                       closed=settings.recovery is not None, log=log, pictures=pictures)
         say(f"{summarize(records)}; now {in_bin()}; "
             f"wall time {time.perf_counter() - start:.0f} s")
         return records
@@ -212,7 +223,7 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
     station.initialize(simulator)
     say(f"robot connected; picking {options.picks} part(s)")
     records = _run(simulator, built[0], options.picks, say,
-                   closed=settings.recovery is not None, log=log)
+                   closed=settings.recovery is not None, log=log, pictures=pictures)
     say(f"{summarize(records)}; wall time {time.perf_counter() - start:.0f} s")
     return records
 
@@ -243,7 +254,7 @@ def _bin_count(pick: PickDiagram | None, simulator: Simulator, scenario: Scenari
 
 def _run(clock: Clock, pick: PickDiagram, picks: int, say: Callable[[str], None],
          in_bin: Callable[[], str] | None = None, closed: bool = False,
-         log: PickLog | None = None) -> list[PickRecord]:
+         log: PickLog | None = None, pictures: PickPictures | None = None) -> list[PickRecord]:
     """Run the picks, reporting each as it ends (and adding it to ``log``); in simulation with
     what is left in the bin (``in_bin``), so a part that a pick pushed over the wall shows up
     at that pick."""
@@ -253,6 +264,8 @@ def _run(clock: Clock, pick: PickDiagram, picks: int, say: Callable[[str], None]
         say(record.describe() + ("" if in_bin is None else f" | {in_bin()}"))
         if log is not None:
             log.add(record)
+        if pictures is not None:
+            pictures.add(record)
 
     run: PickRun = run_picks(clock, pick, limit, on_pick=finished)
     if run.end is RunEnd.STOPPED:

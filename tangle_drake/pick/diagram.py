@@ -171,7 +171,7 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
                                                                  camera.intrinsics))
     depth = station.GetOutputPort("camera.depth_image")
     builder.Connect(depth, graspability.GetInputPort("depth_image"))
-    if planner_settings.record_crop is not None:
+    if planner_settings.record_crop is not None or planner_settings.record_view:
         builder.Connect(depth, planner.GetInputPort("depth_image"))
     builder.Connect(graspability.GetOutputPort("candidates"), planner.GetInputPort("candidates"))
     if selection is not None:

@@ -91,6 +91,9 @@ class PickSettings:
     record_crop: CropSpec | None = None
     """Keep the tried candidate's depth crop of this size in its record (for a pick log);
     needs the planner's ``depth_image`` input and its camera's intrinsics."""
+    record_view: bool = False
+    """Keep what each look saw in its record (``PickRecord.view``: the depth image and the
+    first candidates in the rule's order, for a picture per pick); needs ``depth_image``."""
 
     def __post_init__(self) -> None:
         if self.max_picks < 1:

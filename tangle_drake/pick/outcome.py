@@ -57,6 +57,21 @@ class Rejection:
         return f"{self.kind.value}: {self.detail}"
 
 
+VIEW_CANDIDATES = 5
+"""How many of the rule's candidates a :class:`PickView` keeps."""
+
+
+@dataclass(frozen=True)
+class PickView:
+    """What the planner saw when it chose a grasp (``PickSettings.record_view``)."""
+
+    depth: np.ndarray
+    """The top camera's depth image the grasp was chosen on, metres."""
+    ranked: list
+    """The first :data:`VIEW_CANDIDATES` ``ScoredCandidate`` in the rule's order (best
+    first): each candidate, its P(not tangled) (``None`` without a CNN) and the rule's score."""
+
+
 @dataclass
 class PickRecord:
     """One finished pick: which grasp, what happened, how long each stage took."""
@@ -103,6 +118,8 @@ class PickRecord:
     crop: np.ndarray | None = None
     """With ``PickSettings.record_crop``: the tried candidate's depth crop (metres) in the
     image it was chosen from, as the tangle CNN sees it."""
+    view: PickView | None = None
+    """With ``PickSettings.record_view``: the image and candidates the grasp was chosen from."""
 
     def describe(self) -> str:
         """One line for people: the outcome (and, closed loop, the weighing and what was done

@@ -58,8 +58,9 @@ port                         dir    value
 ``payload``                  in     closed loop: the ``PayloadEstimator``'s estimate
 ``wrist.force_torque``       in     closed loop: the wrist sensor (the put-back's force limit)
 ``safety.fault``             in     optional, hardware: 1 after the station's safety stop
-``depth_image``              in     optional, with ``settings.record_crop``: the camera's
-                                    depth image, cropped into each record
+``depth_image``              in     optional, with ``settings.record_crop`` or
+                                    ``record_view``: the camera's depth image, cropped into
+                                    (or kept in) each record
 ``camera.image_time``        in     optional: when the camera's last image arrived
                                     (station time); a look waits for one newer than the
                                     arm's last motion
@@ -89,10 +90,17 @@ from tangle_drake.failures import FailureKind, pick_failure
 from tangle_drake.pick.choose import EmptyGrasp, choose, rank_scored
 from tangle_drake.pick.closed_loop import FALLBACK, ClosedLoop
 from tangle_drake.pick.modes import Mode, PickSettings, PlannerState
-from tangle_drake.pick.outcome import Outcome, PickRecord, classify_lift
+from tangle_drake.pick.outcome import (
+    VIEW_CANDIDATES,
+    Outcome,
+    PickRecord,
+    PickView,
+    classify_lift,
+)
 from tangle_drake.pick.payload import PayloadEstimate, PayloadPhase, PayloadRequest
 from tangle_drake.pick.recovery import Disposition
 from tangle_drake.planning.motion import Motion
+from tangle_drake.tangle_cnn.selection import ScoredCandidate
 
 __all__ = ["Mode", "PickPlanner", "PickSettings", "rank_scored"]
 
@@ -318,11 +326,16 @@ class PickPlanner(ClosedLoop, LeafSystem):
         candidates = list(self._candidates.Eval(context))
         record.perception_s = time.perf_counter() - start
         ranked: list[tuple[Any, float | None]] = [(c, None) for c in candidates]
+        scored = [ScoredCandidate(c, None, float(c.score)) for c in candidates]
         start = time.perf_counter()  # HasValue evaluates a connected port: the CNN runs here
         if self._scored.HasValue(context):
             selected = self._selected.Eval(context) if self._selected.HasValue(context) else None
-            ranked = rank_scored(list(self._scored.Eval(context)), selected)
+            scored = list(self._scored.Eval(context))
+            ranked = rank_scored(scored, selected)
             record.cnn_s = time.perf_counter() - start
+        if self._settings.record_view and self._depth.HasValue(context):
+            depth = np.array(self._depth.Eval(context).data)[:, :, 0]
+            record.view = PickView(depth, scored[:VIEW_CANDIDATES])
         if not ranked:
             record.failure = FailureKind.NO_CANDIDATE
             record.reason = "no grasp candidate in the bin"
