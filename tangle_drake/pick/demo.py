@@ -31,6 +31,7 @@ from tangle_drake.pick.diagram import (
     pick_settings,
 )
 from tangle_drake.pick.episode import Clock, PickEpisode, PickRun, RunEnd, run_picks
+from tangle_drake.pick.meshcat_view import frame_the_work
 from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.pick_log import PickLog, pick_log_identity
 from tangle_drake.pick.pictures import PickPictures
@@ -154,6 +155,8 @@ def _run_demo(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
         say(f"Meshcat: {meshcat.web_url()}")
     start = time.perf_counter()
     station = build_station(scenario, meshcat)
+    if meshcat is not None:
+        frame_the_work(meshcat, scenario)
     pile = settle_pile(station, scenario, options.seed)
     say(f"pile: {pile.report.num_in_bin}/{pile.report.num_parts} parts in the bin, settled in "
         f"{pile.report.wall_time:.1f} s")

@@ -1,0 +1,89 @@
+"""Where Meshcat's camera starts: a three-quarter view of the bin, with the arm in frame.
+
+Meshcat opens on a distant side view in which the robot is a small figure and the bin's
+contents cannot be seen. :func:`work_view` puts the camera above and beyond the bin's far
+corner, looking at a point between the bin and the arm's base, so the live view and a
+``--record`` replay open on the work. :func:`frame_share` says how much of a frame of
+Meshcat's default camera (three.js, 75 degrees vertical field of view) the bin fills.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydrake.geometry import Meshcat
+
+from tangle_drake.drivers.config import NextageDriver
+from tangle_drake.drivers.registry import carrier
+from tangle_drake.scenario import BinConfig, Scenario
+
+FOV_Y_DEG = 75.0
+"""Meshcat's default perspective camera's vertical field of view."""
+DISTANCE_M = 0.55
+"""From the view's target to the camera, m."""
+ELEVATION_DEG = 50.0
+"""How far above the horizontal the camera looks down, deg."""
+
+
+def work_view(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
+    """(camera position, target) in the world for ``scenario``: the arm's base (the world
+    origin, for a Nextage) and the bin both in view; a gantry's bin seen from its corner."""
+    bin_ = scenario.bin
+    middle = np.array([*bin_.center, bin_.floor_height + 0.5 * bin_.wall_height])
+    _, config = carrier(scenario.model_drivers)
+    if isinstance(config, NextageDriver):
+        robot = np.array([0.0, 0.0, middle[2] + 0.15])  # the torso, above the bin's floor
+        target = 0.7 * middle + 0.3 * robot
+        away = middle[:2] - robot[:2]
+    else:
+        target, away = middle, np.array([1.0, 1.0])
+    away = away / (np.linalg.norm(away) or 1.0)
+    side = np.array([-away[1], away[0]])
+    horizontal = (math.cos(math.radians(35)) * away + math.sin(math.radians(35)) * side)
+    elevation = math.radians(ELEVATION_DEG)
+    offset = np.array([*(math.cos(elevation) * horizontal), math.sin(elevation)]) * DISTANCE_M
+    return target + offset, target
+
+
+def frame_coordinates(camera: np.ndarray, target: np.ndarray, points: np.ndarray,
+                      aspect: float = 1.5) -> np.ndarray:
+    """Where ``points`` ((N, 3), world) appear in the frame of a z-up look-at camera at
+    ``camera`` aimed at ``target``: (N, 2), -1 to 1 across the frame's width and height (up
+    is +), NaN for a point behind the camera."""
+    forward = (target - camera) / np.linalg.norm(target - camera)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    half_y = math.tan(math.radians(FOV_Y_DEG) / 2)
+    rel = np.asarray(points, dtype=np.float64) - camera
+    depth = rel @ forward
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xy = np.stack([rel @ right / depth / (aspect * half_y), rel @ up / depth / half_y], 1)
+    xy[depth <= 0] = np.nan
+    return xy
+
+
+def bin_corners(bin_: BinConfig) -> np.ndarray:
+    """The bin's eight outer corners (floor and rim), (8, 3)."""
+    cx, cy = bin_.center
+    sx, sy = (s / 2 + bin_.wall_thickness for s in bin_.inner_size)
+    return np.array([[cx + i * sx, cy + j * sy, bin_.floor_height + k * bin_.wall_height]
+                     for i in (-1, 1) for j in (-1, 1) for k in (0, 1)])
+
+
+def frame_share(camera: np.ndarray, target: np.ndarray, bin_: BinConfig,
+                aspect: float = 1.5) -> float:
+    """The share of the frame (0-1) that the box around the bin's corners covers (0 if a
+    corner is behind the camera)."""
+    xy = frame_coordinates(camera, target, bin_corners(bin_), aspect)
+    if np.isnan(xy).any():
+        return 0.0
+    xy = np.clip(xy, -1, 1)
+    return float(np.ptp(xy[:, 0]) * np.ptp(xy[:, 1]) / 4)
+
+
+def frame_the_work(meshcat: Meshcat, scenario: Scenario) -> None:
+    """Point ``meshcat``'s camera at the work (see :func:`work_view`)."""
+    camera, target = work_view(scenario)
+    meshcat.SetCameraPose(camera, target)
