@@ -3,19 +3,25 @@
 import base64
 import re
 import struct
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from pydrake.geometry import Meshcat, MeshcatParams
 
 from tangle_drake.pick.meshcat_view import (
+    CHOSEN_RGBA,
+    ROOT,
+    CandidateMarkers,
     bin_corners,
     frame_coordinates,
     frame_share,
     frame_the_work,
     work_view,
 )
+from tangle_drake.pick.outcome import PickRecord, PickView
 from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.tangle_cnn.selection import ScoredCandidate
 
 MIN_SHARE = 0.06
 """The bin's corners must span at least this share of a 3:2 frame (a far side view from
@@ -51,3 +57,58 @@ def test_the_replays_camera_frames_the_bin_and_the_arm(name):
         assert (np.abs(arm) < 1).all()
     # A far, side-on view like the one Meshcat opens on fills far less.
     assert frame_share(np.array([-3.0, 0.0, 1.5]), np.zeros(3), scenario.bin) < MIN_SHARE / 4
+
+
+class SpyMeshcat:
+    """Records what ``CandidateMarkers`` asks Meshcat to do."""
+
+    def __init__(self) -> None:
+        self.objects: dict[str, object] = {}
+        self.visible: dict[str, list[tuple[float | None, bool]]] = {}
+
+    def SetObject(self, path, shape, rgba) -> None:
+        self.objects[path] = rgba
+
+    def SetTransform(self, path, X) -> None:
+        assert path in self.objects
+
+    def SetProperty(self, path, name, value, time_in_recording=None) -> None:
+        assert name == "visible"
+        self.visible.setdefault(path, []).append((time_in_recording, value))
+
+    def shown_at(self, path: str, t: float) -> bool:
+        """The replay's visibility of ``path`` at ``t``: its last key at or before ``t``."""
+        keys = [(when, value) for when, value in self.visible[path] if when <= t]
+        return max(keys, key=lambda key: key[0])[1] if keys else True
+
+
+def _record(index: int, n: int) -> PickRecord:
+    candidates = [SimpleNamespace(u=10.0 * k, v=0.0, score=1.0 - 0.1 * k,
+                                  pose=np.eye(4) + np.pad([[0, 0, 0, 0.1 * k]], ((0, 3), (0, 0))))
+                  for k in range(n)]
+    view = PickView(np.zeros((4, 4)), [ScoredCandidate(c, 0.5, 0.5) for c in candidates])
+    return PickRecord(index=index, candidate=candidates[1], view=view)
+
+
+def test_each_picks_candidates_show_during_that_pick_only():
+    meshcat = SpyMeshcat()
+    markers = CandidateMarkers(meshcat)
+    first, second = _record(1, 3), _record(2, 5)
+    markers.update(first, 1.0, recording=True)
+    markers.update(first, 2.0, recording=True)  # the same pick: nothing new
+    markers.update(None, 12.0, recording=True)  # between picks: nothing shown
+    markers.update(second, 13.0, recording=True)
+    assert len([p for p in meshcat.objects if p.startswith(f"{ROOT}/pick_1/")]) == 3 * 3
+    assert len([p for p in meshcat.objects if p.startswith(f"{ROOT}/pick_2/")]) == 5 * 3
+    assert meshcat.objects[f"{ROOT}/pick_1/1/closing"] == CHOSEN_RGBA  # the chosen one
+    assert meshcat.objects[f"{ROOT}/pick_1/0/closing"] != CHOSEN_RGBA
+    for t, shown in ((0.5, []), (5.0, [1]), (12.5, []), (14.0, [2])):
+        assert [i for i in (1, 2) if meshcat.shown_at(f"{ROOT}/pick_{i}", t)] == shown, t
+
+
+def test_the_demos_replay_draws_the_candidates(tmp_path):
+    meshcat = Meshcat(MeshcatParams(host="localhost"))
+    CandidateMarkers(meshcat).update(_record(1, 2), 1.0, recording=False)
+    html = meshcat.StaticHtml()
+    assert any(b"/candidates/pick_1/1/closing" in base64.b64decode(text)
+               for text in re.findall(r'base64,([A-Za-z0-9+/=]+)"', html))

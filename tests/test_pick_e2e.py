@@ -1,6 +1,8 @@
 """Short demo runs in simulation through the whole pick diagram: one open-loop pick, recorded
 for Meshcat, and a closed-loop run to one delivery into the tray."""
 
+import base64
+import re
 from dataclasses import replace
 
 from tangle_drake.pick.demo import DemoOptions, run_demo
@@ -34,7 +36,12 @@ def test_one_pick_end_to_end(tmp_path):
     pick_line = next(line for line in lines if line.startswith("pick 1: "))
     assert f" | {left} of 6 parts in the bin" in pick_line
 
-    assert "<html" in (tmp_path / "demo.html").read_text()[:1000].lower()
+    replay = (tmp_path / "demo.html").read_text()
+    assert "<html" in replay[:1000].lower()
+    commands = [base64.b64decode(text) for text in re.findall(r'base64,([A-Za-z0-9+/=]+)"',
+                                                               replay)]
+    assert any(b"set_target" in c for c in commands)  # framed on the work
+    assert any(b"/candidates/pick_1/0/closing" in c for c in commands)  # its candidates drawn
     dot = (tmp_path / "pick_demo.dot").read_text()
     for system in ("graspability", "pick_planner", "lift_monitor", "station"):
         assert system in dot

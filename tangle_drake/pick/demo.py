@@ -13,7 +13,7 @@ from pathlib import Path
 
 from pydrake.geometry import Meshcat, MeshcatParams
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import Context, Diagram
+from pydrake.systems.framework import Context, Diagram, EventStatus
 
 from tangle_drake.bin_model import inside_bin
 from tangle_drake.crops import CropSpec
@@ -31,7 +31,7 @@ from tangle_drake.pick.diagram import (
     pick_settings,
 )
 from tangle_drake.pick.episode import Clock, PickEpisode, PickRun, RunEnd, run_picks
-from tangle_drake.pick.meshcat_view import frame_the_work
+from tangle_drake.pick.meshcat_view import CandidateMarkers, frame_the_work
 from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.pick_log import PickLog, pick_log_identity
 from tangle_drake.pick.pictures import PickPictures
@@ -122,11 +122,14 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     motion = motion_for(scenario)  # before any long work: the scenario must have a robot
     settings = pick_settings(scenario, max_picks=options.picks) if options.open_loop \
         else closed_loop_settings(scenario, max_picks=options.picks)
+    if options.meshcat or options.record:  # the candidates are drawn from each look
+        settings = replace(settings, record_view=True)
     if options.log_picks is None and options.pictures is None:
         return _run_demo(options, scenario, choice, settings, motion, say, None)
     model = load_tangle_model(choice.model) if choice.model else None
     crop = model.crop if model is not None else CropSpec.for_gripper()
-    settings = replace(settings, record_crop=crop, record_view=options.pictures is not None)
+    settings = replace(settings, record_crop=crop,
+                       record_view=settings.record_view or options.pictures is not None)
     pictures = None if options.pictures is None else PickPictures(
         options.pictures, camera_model(scenario).intrinsics,
         model.normalisation if model is not None else None)
@@ -174,8 +177,12 @@ def _run_demo(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
     if meshcat is not None and options.record:
         meshcat.StartRecording(RECORD_FPS, set_visualizations_while_recording=options.meshcat)
     in_bin = _bin_count(pick, episode.simulator, scenario, scenario.pile.total_count)
+    observers = [CandidateMarkers(meshcat).observer(pick, recording=bool(options.record))
+                 ] if meshcat is not None else []
     if pictures is not None and scenario.view_cameras:
-        pictures.watch(episode.simulator, pick, scenario.view_cameras[0])
+        observers.append(pictures.observer(pick, scenario.view_cameras[0]))
+    if observers:
+        episode.simulator.set_monitor(lambda root: _observe(observers, root))
     records = _run(episode.simulator, pick, options.picks, say, in_bin,
                    closed=settings.recovery is not None, log=log, pictures=pictures)
     if meshcat is not None and options.record:
@@ -186,6 +193,13 @@ def _run_demo(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
         say(f"wrote {options.record}")
     say(f"{summarize(records)}; now {in_bin()}; wall time {time.perf_counter() - start:.0f} s")
     return records
+
+
+def _observe(observers: list[Callable[[Context], None]], root: Context) -> EventStatus:
+    """The simulator's monitor: each observer sees the root context after every step."""
+    for observe in observers:
+        observe(root)
+    return EventStatus.Succeeded()
 
 
 def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice,

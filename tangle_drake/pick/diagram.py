@@ -235,6 +235,7 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
             builder.Connect(poses, tray.GetInputPort("body_poses"))
     builder.ExportOutput(planner.GetOutputPort("mode"), "mode")
     builder.ExportOutput(planner.GetOutputPort("picks"), "picks")
+    builder.ExportOutput(planner.GetOutputPort("current_pick"), "current_pick")
     diagram = builder.Build()
     diagram.set_name("pick_demo")
     return PickDiagram(diagram, station, planner, monitor, tray, payload)

@@ -1,21 +1,28 @@
-"""Where Meshcat's camera starts: a three-quarter view of the bin, with the arm in frame.
+"""What Meshcat shows of a pick: the camera framed on the work, and each pick's candidates.
 
 Meshcat opens on a distant side view in which the robot is a small figure and the bin's
 contents cannot be seen. :func:`work_view` puts the camera above and beyond the bin's far
 corner, looking at a point between the bin and the arm's base, so the live view and a
 ``--record`` replay open on the work. :func:`frame_share` says how much of a frame of
 Meshcat's default camera (three.js, 75 degrees vertical field of view) the bin fills.
+:class:`CandidateMarkers` draws the candidates of the pick in progress.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
-from pydrake.geometry import Meshcat
+from pydrake.geometry import Box, Meshcat, Rgba
+from pydrake.math import RigidTransform
+from pydrake.systems.framework import Context
 
 from tangle_drake.drivers.config import NextageDriver
 from tangle_drake.drivers.registry import carrier
+from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.pick.diagram import PickDiagram
+from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.scenario import BinConfig, Scenario
 
 FOV_Y_DEG = 75.0
@@ -87,3 +94,64 @@ def frame_the_work(meshcat: Meshcat, scenario: Scenario) -> None:
     """Point ``meshcat``'s camera at the work (see :func:`work_view`)."""
     camera, target = work_view(scenario)
     meshcat.SetCameraPose(camera, target)
+
+
+CHOSEN_RGBA = Rgba(0.1, 0.9, 0.1, 0.9)
+OTHER_RGBA = (Rgba(1.0, 0.85, 0.0, 0.7), Rgba(1.0, 0.55, 0.0, 0.7), Rgba(1.0, 0.3, 0.0, 0.7),
+              Rgba(0.9, 0.0, 0.6, 0.7))
+"""The rule's 2nd to 5th candidates, yellow to magenta (the overlay's order of colours)."""
+ROOT = "/candidates"
+
+
+class CandidateMarkers:
+    """Draws each pick's ranked candidates in Meshcat while that pick runs: for each, the
+    closing segment between the finger pads and the two finger footprints at the fingertips,
+    the chosen one green. Each pick's markers are shown when it starts and hidden when it
+    ends, keyed at those simulated times in a recording, so a replay shows pick 2's markers,
+    not pick 1's, during pick 2. Fed with the pick diagram's ``current_pick`` (its records
+    need ``PickSettings.record_view``) by :meth:`observer`, from the simulator's monitor."""
+
+    def __init__(self, meshcat: Meshcat, gripper: GripperSpec = DEFAULT_GRIPPER) -> None:
+        self._meshcat = meshcat
+        self._gripper = gripper
+        self._shown: int | None = None
+
+    def observer(self, pick: PickDiagram, recording: bool) -> Callable[[Context], None]:
+        """What the simulator's monitor calls with the root context after each step."""
+        port = pick.diagram.GetOutputPort("current_pick")
+        return lambda root: self.update(port.Eval(root), root.get_time(), recording)
+
+    def update(self, record: PickRecord | None, t: float, recording: bool) -> None:
+        """Show ``record``'s candidates (``None``: no pick runs) at simulated time ``t``."""
+        index = None if record is None or record.view is None else record.index
+        if index == self._shown:
+            return
+        at = t if recording else None
+        if self._shown is not None:
+            self._meshcat.SetProperty(f"{ROOT}/pick_{self._shown}", "visible", False, at)
+        if index is not None:
+            self._draw(f"{ROOT}/pick_{index}", record)
+            self._meshcat.SetProperty(f"{ROOT}/pick_{index}", "visible", False, 0.0
+                                      if recording else None)
+            self._meshcat.SetProperty(f"{ROOT}/pick_{index}", "visible", True, at)
+        self._shown = index
+
+    def _draw(self, path: str, record: PickRecord) -> None:
+        g = self._gripper
+        others = iter(OTHER_RGBA)
+        for rank, scored in enumerate(record.view.ranked):
+            c = scored.candidate
+            if c.pose is None:
+                continue
+            rgba = CHOSEN_RGBA if c is record.candidate else next(others, OTHER_RGBA[-1])
+            X_WT = RigidTransform(np.asarray(c.pose))
+            half = g.max_opening / 2 + g.finger_thickness / 2
+            shapes = {"closing": (Box(0.002, g.max_opening, 0.002), [0.0, 0.0, 0.0]),
+                      "finger_a": (Box(g.finger_width, g.finger_thickness, 0.004),
+                                   [0.0, half, 0.0]),
+                      "finger_b": (Box(g.finger_width, g.finger_thickness, 0.004),
+                                   [0.0, -half, 0.0])}
+            for name, (shape, offset) in shapes.items():
+                where = f"{path}/{rank}/{name}"
+                self._meshcat.SetObject(where, shape, rgba)
+                self._meshcat.SetTransform(where, X_WT @ RigidTransform(offset))

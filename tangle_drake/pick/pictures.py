@@ -12,12 +12,12 @@ wrist's weighing instead.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import cv2
 import numpy as np
-from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import Context, EventStatus
+from pydrake.systems.framework import Context
 from pydrake.systems.sensors import CameraConfig
 
 from tangle_drake.camera import CameraIntrinsics
@@ -176,10 +176,11 @@ class PickPictures:
         self._side: dict[int, np.ndarray] = {}
         self.written: list[Path] = []
 
-    def watch(self, simulator: Simulator, pick: PickDiagram, view: CameraConfig) -> None:
-        """Render the view camera ``view`` (one of the scenario's ``view_cameras``) once per
-        grasp as the lift reaches its top, from the simulator's monitor, and keep the part of
-        it around the gripper: the fingers and what hangs below them."""
+    def observer(self, pick: PickDiagram, view: CameraConfig) -> Callable[[Context], None]:
+        """What the simulator's monitor calls with the root context after each step: renders
+        the view camera ``view`` (one of the scenario's ``view_cameras``) once per grasp as
+        the lift reaches its top, and keeps the part of it around the gripper (the fingers
+        and what hangs below them)."""
         station, diagram = pick.station, pick.diagram
         mode_port, picks_port = diagram.GetOutputPort("mode"), diagram.GetOutputPort("picks")
         camera = station.GetOutputPort(f"{SIM_ONLY_PREFIX}{view.name}.rgb_image")
@@ -188,7 +189,7 @@ class PickPictures:
         frame = _ViewFrame(view)
         before = [Mode.SETTLE]
 
-        def monitor(root: Context) -> EventStatus:
+        def observe(root: Context) -> None:
             mode = mode_port.Eval(root)
             if mode in _LIFT_TOP and before[0] not in _LIFT_TOP:
                 index = len(picks_port.Eval(root)) + 1
@@ -197,9 +198,8 @@ class PickPictures:
                     p_WT = tcp.CalcPoseInWorld(plant.GetMyContextFromRoot(root)).translation()
                     self._side[index] = frame.around(image, p_WT)
             before[0] = mode
-            return EventStatus.Succeeded()
 
-        simulator.set_monitor(monitor)
+        return observe
 
     def add(self, record: PickRecord) -> None:
         """Write the picture of ``record`` (a pick made with ``record_view``)."""

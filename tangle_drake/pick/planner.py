@@ -69,6 +69,8 @@ port                         dir    value
 ``payload.request``          out    what the ``PayloadEstimator`` should do now
 ``mode``                     out    the current :class:`Mode`
 ``picks``                    out    ``list[PickRecord]`` of the finished picks (grasps)
+``current_pick``             out    the ``PickRecord`` of the grasp in progress (its
+                                    candidate and, with ``record_view``, the look), or ``None``
 ============================ ====== ===================================================
 """
 
@@ -156,6 +158,9 @@ class PickPlanner(ClosedLoop, LeafSystem):
         self.DeclareAbstractOutputPort(
             "picks", lambda: AbstractValue.Make([]),
             lambda context, value: value.set_value(list(self._get(context).picks)), depends)
+        self.DeclareAbstractOutputPort(
+            "current_pick", lambda: AbstractValue.Make(None),
+            lambda context, value: value.set_value(self._get(context).record), depends)
         self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self._settings.update_period, 0.0,
                                                     self._update)
