@@ -2,9 +2,12 @@
 
 import base64
 import re
+import shutil
 import struct
+import subprocess
 from types import SimpleNamespace
 
+import cv2
 import numpy as np
 import pytest
 from pydrake.geometry import Meshcat, MeshcatParams
@@ -20,12 +23,15 @@ from tangle_drake.pick.meshcat_view import (
     work_view,
 )
 from tangle_drake.pick.outcome import PickRecord, PickView
+from tangle_drake.pile import settle_pile
 from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.station import build_station
 from tangle_drake.tangle_cnn.selection import ScoredCandidate
 
-MIN_SHARE = 0.06
+MIN_SHARE = 0.04
 """The bin's corners must span at least this share of a 3:2 frame (a far side view from
 (-3, 0, 1.5) m at the world origin: 0.1 %)."""
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 
 def _replay_vector(html: str, marker: bytes) -> np.ndarray:
@@ -112,3 +118,33 @@ def test_the_demos_replay_draws_the_candidates(tmp_path):
     html = meshcat.StaticHtml()
     assert any(b"/candidates/pick_1/1/closing" in base64.b64decode(text)
                for text in re.findall(r'base64,([A-Za-z0-9+/=]+)"', html))
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="no browser: apt-get install chromium (Debian's "
+                                             "package; .ci/run installs it)")
+def test_a_browser_opens_the_replay_on_the_bins_contents(tmp_path):
+    scenario = resolve_scenario("pick_demo.yaml")
+    scenario.view_cameras = []
+    meshcat = Meshcat(MeshcatParams(host="localhost"))
+    station = build_station(scenario, meshcat)
+    frame_the_work(meshcat, scenario)
+    settle_pile(station, scenario, 0)
+    (tmp_path / "replay.html").write_text(meshcat.StaticHtml())
+    shot = tmp_path / "shot.png"
+    subprocess.run([CHROMIUM, "--headless=new", "--no-sandbox", "--disable-gpu",
+                    "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+                    "--window-size=1200,800", "--virtual-time-budget=15000",
+                    f"--screenshot={shot}", (tmp_path / "replay.html").as_uri()],
+                   check=True, capture_output=True, timeout=180)
+    picture = cv2.imread(str(shot)).astype(int)
+    camera, target = work_view(scenario)
+    (x, y), = frame_coordinates(camera, target, np.array([[*scenario.bin.center,
+                                                           scenario.bin.floor_height]]))
+    u, v = int((x + 1) / 2 * 1200), int((1 - y) / 2 * 800)
+    assert 0 <= u < 1200 and 0 <= v < 800
+    around = picture[max(v - 60, 0):v + 60, max(u - 60, 0):u + 60]
+    blue, green, red = around[..., 0], around[..., 1], around[..., 2]
+    parts = (red > blue + 60) & (green > blue + 20)  # the parts' orange, not the grey scene
+    assert parts.mean() > 0.05, parts.mean()
+    corner = picture[:80, :80]
+    assert (np.abs(around.mean(axis=(0, 1)) - corner.mean(axis=(0, 1))) > 10).any()

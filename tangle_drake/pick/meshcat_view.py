@@ -27,10 +27,14 @@ from tangle_drake.scenario import BinConfig, Scenario
 
 FOV_Y_DEG = 75.0
 """Meshcat's default perspective camera's vertical field of view."""
-DISTANCE_M = 0.55
-"""From the view's target to the camera, m."""
-ELEVATION_DEG = 50.0
+DISTANCE_M = 0.9
+"""From the view's target to the camera, m (an arm in the scene: it must be in view too)."""
+GANTRY_DISTANCE_M = 0.6
+"""The same, for a gantry's bin alone."""
+ELEVATION_DEG = 40.0
 """How far above the horizontal the camera looks down, deg."""
+SIDE_DEG = 30.0
+"""How far round from straight beyond the bin (seen from the arm) the camera stands, deg."""
 
 
 def work_view(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
@@ -41,15 +45,15 @@ def work_view(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     _, config = carrier(scenario.model_drivers)
     if isinstance(config, NextageDriver):
         robot = np.array([0.0, 0.0, middle[2] + 0.15])  # the torso, above the bin's floor
-        target = 0.7 * middle + 0.3 * robot
-        away = middle[:2] - robot[:2]
+        target = 0.6 * middle + 0.4 * robot
+        away, distance = middle[:2] - robot[:2], DISTANCE_M
     else:
-        target, away = middle, np.array([1.0, 1.0])
+        target, away, distance = middle, np.array([1.0, 1.0]), GANTRY_DISTANCE_M
     away = away / (np.linalg.norm(away) or 1.0)
     side = np.array([-away[1], away[0]])
-    horizontal = (math.cos(math.radians(35)) * away + math.sin(math.radians(35)) * side)
+    horizontal = (math.cos(math.radians(SIDE_DEG)) * away + math.sin(math.radians(SIDE_DEG)) * side)
     elevation = math.radians(ELEVATION_DEG)
-    offset = np.array([*(math.cos(elevation) * horizontal), math.sin(elevation)]) * DISTANCE_M
+    offset = np.array([*(math.cos(elevation) * horizontal), math.sin(elevation)]) * distance
     return target + offset, target
 
 
