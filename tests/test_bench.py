@@ -9,11 +9,13 @@ from dataclasses import replace
 from pathlib import Path
 from types import SimpleNamespace
 
+import cv2
 import numpy as np
 import pytest
 import torch
 from pydrake.math import RigidTransform
 
+from tangle_drake.bench.gallery import GALLERY, INDEX, TILE_KEY, tile_path
 from tangle_drake.bench.methods import MethodRun, MethodSelector
 from tangle_drake.bench.report import terminal_summary
 from tangle_drake.bench.results import IDENTITY_FILE, RESULTS_FILE
@@ -55,6 +57,27 @@ def quick_run(tmp_path_factory, untrained_model):
     code = main(["bench", "--quick", "--workers", "1", "--out", str(out), "--methods",
                  "random", "graspability", f"model:{untrained_model}"])
     return code, out
+
+
+def test_the_gallery_holds_a_tile_of_exactly_each_failed_pick(tmp_path):
+    out = tmp_path / "gallery_run"  # E-shapes: graspability's first grasp comes up empty
+    assert main(["bench", "--quick", "--parts", "e_shape", "--methods", "graspability",
+                 "random", "--trials", "2", "--workers", "1", "--gallery",
+                 "--out", str(out)]) == 0
+    failed = [(trial["part"], trial["trial"], row) for trial in trials_in(out)
+              for row in trial["picks"] if row["result"] != "success"]
+    tiles = sorted((out / GALLERY).rglob("*.png"))
+    assert failed and sorted(tile_path(out, part, t, row) for part, t, row in failed) == tiles
+    for part, t, row in failed:
+        image = cv2.imread(str(tile_path(out, part, t, row)))
+        assert image is not None and image.shape[0] > 100
+        assert TILE_KEY not in row  # the tile went to disk, not into the results
+    index = (out / GALLERY / INDEX).read_text()
+    assert index.count("![") == len(failed)
+    for method in {row["method"] for _, _, row in failed}:
+        assert f"## {method}: " in index
+    report = (out / "report.md").read_text()
+    assert f"[{GALLERY}/{INDEX}]({GALLERY}/{INDEX})" in report
 
 
 def trials_in(out: Path) -> list[dict]:

@@ -211,6 +211,10 @@ def markdown(summary: dict) -> str:
            "Success = exactly one part lifted. Rates in %, with the Wilson 95 % confidence "
            "interval; every method picks from the same piles (paired).", ""]
     out += [f"> {note}" for note in summary["notes"]] + ([""] if summary["notes"] else [])
+    if gallery := summary.get("gallery"):
+        out += [f"Failure gallery: [{gallery['index']}]({gallery['index']}), a tile of each "
+                f"failed pick by method and kind (drawing them took {gallery['seconds']:.1f} s "
+                "of the run).", ""]
     out += ["## Success rate", "", rate_table(summary), "",
             "![success per method and part](success.png)", "",
             "## Paired differences (method A − method B, same trials)", "",

@@ -22,6 +22,7 @@ from tqdm import tqdm
 from tangle_drake import __version__
 from tangle_drake.bench.clear_report import summarize_clearing, write_clear_report
 from tangle_drake.bench.clearing import ClearWorker
+from tangle_drake.bench.gallery import save_tiles, write_index
 from tangle_drake.bench.methods import DEFAULT_METHODS, Method, file_digest, parse_method
 from tangle_drake.bench.report import summarize_run, write_report
 from tangle_drake.bench.results import ResultStore
@@ -75,6 +76,8 @@ class BenchOptions:
     clear: bool = False
     """Clear whole bins (closed loop unless ``open_loop``) instead of one pick per method."""
     open_loop: bool = False
+    gallery: bool = False
+    """Write a tile of each failed pick into ``out/gallery`` (:mod:`.gallery`)."""
     show_progress: bool | None = None
     command: str = "tangle-drake bench"
     """The command line, written into the report."""
@@ -157,8 +160,10 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
         raise TangleDrakeError(
             f"--mode {options.mode} disagrees with --scenario {path}, whose carrier makes it "
             f"{mode} mode: drop --mode, or pass the {MODE_SCENARIOS[options.mode]} scenario")
+    if options.gallery and options.clear:
+        raise TangleDrakeError("--gallery draws single picks; with --clear, use demo --pictures")
     config = BenchConfig(text, tuple(parts), per_part, mode, options.seed, pile_size,
-                         options.clear, options.open_loop)
+                         options.clear, options.open_loop, options.gallery)
     if options.clear and not options.open_loop:
         closed_loop_settings(scenario)  # a tray and a wrist sensor, or a clear error now
     return config, trials, notices
@@ -223,6 +228,11 @@ def run_bench(options: BenchOptions, say: Callable[[str], None] = print) -> Benc
                                      {**meta, "open_loop": config.open_loop})
         files = write_clear_report(store.directory, done, summary, names, methods)
     else:
+        if config.gallery:
+            index = write_index(store.directory, done, methods)
+            meta["gallery"] = {"index": index.relative_to(store.directory).as_posix(),
+                               "seconds": sum(row.get("gallery_s", 0.0) for trial in done
+                                              for row in trial["picks"])}
         summary = summarize_run(done, names, methods, meta)
         files = write_report(store.directory, done, summary, names, methods)
     return BenchOutcome(store.directory, summary, files, new, interrupted, notices)
@@ -261,6 +271,8 @@ def _run_trials(config: BenchConfig, store: ResultStore, todo: list[tuple[int, i
                     spec = config.parts[task[0]]
                     raise TangleDrakeError(f"trial {task[1]} of {spec.name} (seed "
                                            f"{config.seed}) failed: {error}") from error
+                if config.gallery:
+                    save_tiles(store.directory, result)
                 store.add(result)
                 new += 1
                 if config.clear:

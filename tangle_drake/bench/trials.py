@@ -19,7 +19,9 @@ from typing import Any
 import numpy as np
 from pydrake.systems.framework import Context
 
+from tangle_drake.bench.gallery import TILE_KEY, caption, failure_kind, timed_tile
 from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
+from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.drivers.config import GantryDriver
 from tangle_drake.drivers.registry import carrier
 from tangle_drake.errors import TangleDrakeError
@@ -33,7 +35,7 @@ from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
-from tangle_drake.station import build_station
+from tangle_drake.station import build_station, camera_model
 
 MODE_SCENARIOS = {"floating": "floating_gripper.yaml", "arm": "pick_demo.yaml"}
 """The shipped scenario of each ``--mode``: the gripper on the gantry, or on the Nextage."""
@@ -82,6 +84,8 @@ class BenchConfig:
     """Clear whole bins (:mod:`.clearing`) instead of one pick per method and pile."""
     open_loop: bool = False
     """With ``clear``: the paper's open loop instead of the closed one."""
+    gallery: bool = False
+    """Draw a tile of each failed pick (:mod:`.gallery`); not part of the run's identity."""
 
 
 def scenario_mode(scenario: Scenario, source: str) -> str:
@@ -139,6 +143,8 @@ class _Rig:
     update_period: float
     """The planner's: while the pile is locked, the driver looks at every update."""
     methods: dict[str, Method] = field(default_factory=dict)
+    intrinsics: CameraIntrinsics | None = None
+    """The top camera's, for the gallery's tiles."""
 
 
 class TrialWorker:
@@ -165,7 +171,7 @@ class TrialWorker:
                 "wall_s": time.perf_counter() - drop_start,
                 "cpu_s": time.process_time() - drop_cpu}
         random_seed = method_seed(self.config.seed, spec.name, trial)
-        picks = [self._pick(rig, settled.state, MethodRun(name, random_seed))
+        picks = [self._pick(rig, settled.state, MethodRun(name, random_seed), spec.name, trial)
                  for name in rig.methods]
         return {"part": spec.name, "trial": trial, "pile": pile, "picks": picks,
                 "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
@@ -192,9 +198,11 @@ class TrialWorker:
             selection=selection_wiring(methods, spec.name, scenario))
         return _Rig(PileSettler(build_station(scenario), scenario), PickEpisode(pick),
                     FLOATING_SIM_LIMIT if floating else SIM_TIME_PER_PICK,
-                    settings.update_period, {m.name: m for m in methods})
+                    settings.update_period, {m.name: m for m in methods},
+                    camera_model(scenario).intrinsics)
 
-    def _pick(self, rig: _Rig, state: np.ndarray, run: MethodRun) -> dict:
+    def _pick(self, rig: _Rig, state: np.ndarray, run: MethodRun, part: str,
+              trial: int) -> dict:
         start, cpu = time.perf_counter(), time.process_time()
         diagram, station = rig.episode.pick.diagram, rig.episode.pick.station
         depth = []
@@ -220,10 +228,15 @@ class TrialWorker:
         rig.episode.start(state, prepare)
         result = rig.episode.run(rig.sim_limit, step=step)
         record = result.records[0] if result.records else None
-        return pick_row(run.name, record, {
+        row = pick_row(run.name, record, {
             "sim_s": round(result.time, 3), "wall_s": time.perf_counter() - start,
             "cpu_s": time.process_time() - cpu,
             "depth_digest": hashlib.sha256(np.asarray(depth[0].data).tobytes()).hexdigest()[:16]})
+        if self.config.gallery and failure_kind(row) is not None:
+            row[TILE_KEY], row["gallery_s"] = timed_tile(
+                np.asarray(depth[0].data)[:, :, 0], record, rig.intrinsics,
+                caption(run.name, part, trial, row))
+        return row
 
 
 def pick_row(method: str, record: PickRecord | None, extra: dict) -> dict:

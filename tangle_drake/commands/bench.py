@@ -53,6 +53,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--open-loop", action="store_true",
                         help="with --clear: the paper's open loop (one look, one grasp, no "
                              "weighing), to compare on the same piles")
+    parser.add_argument("--gallery", action="store_true",
+                        help="also write a tile of each failed pick (the top view at pick time "
+                             "with the chosen grasp) into OUT/gallery, by method and failure "
+                             "kind, linked from report.md")
     parser.add_argument("--quick", action="store_true",
                         help="a quick check (for CI): unless given, u_hook only, random and "
                              "graspability, 2 trials; piles of 6 parts")
@@ -74,6 +78,7 @@ def command_line(args: argparse.Namespace) -> str:
     words += ["--clear"] if args.clear else []
     words += ["--open-loop"] if args.open_loop else []
     words += ["--quick"] if args.quick else []
+    words += ["--gallery"] if args.gallery else []
     return shlex.join([*words, "--out", str(args.out)])
 
 
@@ -85,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
         methods=args.methods, parts=args.parts, mesh_scale=args.mesh_scale, trials=args.trials,
         workers=args.workers, ray=args.ray, out=args.out, mode=args.mode, seed=args.seed,
         scenario=args.scenario, quick=args.quick, clear=args.clear, open_loop=args.open_loop,
-        command=command_line(args)))
+        gallery=args.gallery, command=command_line(args)))
     if args.clear:
         from tangle_drake.bench.clear_report import terminal_clear_summary
 
