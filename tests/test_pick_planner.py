@@ -165,6 +165,7 @@ def test_a_pick_passes_every_mode_in_order_and_looks_once_per_pick():
     record = records[0]
     assert record.rank == 0 and record.width == pytest.approx(0.003) and record.lifted == 1
     assert record.execution_s > 0 and record.planning_s > 0
+    assert records[1].started_at > record.started_at + record.execution_s > 0  # in turn
     assert summarize(records) == "2 pick(s): 2 one part"
 
 

@@ -107,6 +107,8 @@ class PickRecord:
     """Wall time of IK and trajectories, over every candidate tried, s."""
     execution_s: float = 0.0
     """Robot (simulated) time from the start of the approach to the return home, s."""
+    started_at: float | None = None
+    """Simulated (or controller) time at which the approach began, s."""
     estimate: PayloadEstimate | None = None
     """Closed loop: the first weighing at the top of the lift."""
     verdict: Verdict | None = None

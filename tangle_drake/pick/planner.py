@@ -262,7 +262,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
         if mode is Mode.OPEN or (mode is Mode.RELEASE and self._recovery is None):
             s = replace(s, width=self._settings.open_width)
         if mode is Mode.SETTLE:  # back home: the pick is over
-            record = replace(s.record, execution_s=t - s.started)
+            record = replace(s.record, execution_s=t - s.started, started_at=s.started)
             s = self._finish(replace(s, plan=None, record=None), record, t)
         return s
 
@@ -277,6 +277,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
             if s.record is None:
                 return stopped
             record = replace(s.record, outcome=Outcome.FAILED, execution_s=t - s.started,
+                             started_at=s.started,
                              failure=FailureKind.SAFETY_STOP,
                              reason=f"safety stop during {s.mode.value}")
             return replace(stopped, picks=(*s.picks, record))
