@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from pydrake.geometry import Meshcat, MeshcatParams
 
+from tangle_drake.pick.demo import DemoOptions, run_demo
 from tangle_drake.pick.meshcat_view import (
     CHOSEN_RGBA,
     ROOT,
@@ -148,3 +149,45 @@ def test_a_browser_opens_the_replay_on_the_bins_contents(tmp_path):
     assert parts.mean() > 0.05, parts.mean()
     corner = picture[:80, :80]
     assert (np.abs(around.mean(axis=(0, 1)) - corner.mean(axis=(0, 1))) > 10).any()
+
+
+def _screenshot(html: str, seek: float | None, out) -> np.ndarray:
+    """The replay in headless Chromium at 1200 x 800, paused at ``seek`` s (if given)."""
+    if seek is not None:  # pause the replay there, so nothing moves when the shot is taken
+        html = html.replace("</body>", "<script>setTimeout(() => { viewer.animator.pause(); "
+                            f"viewer.animator.seek({seek}); viewer.set_dirty(); }}, 300);"
+                            "</script></body>")
+    page = out.with_suffix(".html")
+    page.write_text(html)
+    subprocess.run([CHROMIUM, "--headless=new", "--no-sandbox", "--disable-gpu",
+                    "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+                    "--window-size=1200,800", "--virtual-time-budget=3000",
+                    f"--screenshot={out}", page.as_uri()],
+                   check=True, capture_output=True, timeout=180)
+    return cv2.imread(str(out)).astype(int)
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="no browser: apt-get install chromium (Debian's "
+                                             "package; .ci/run installs it)")
+def test_the_replay_shows_pick_2s_candidates_not_pick_1s_at_pick_2s_time(tmp_path):
+    scenario = resolve_scenario("floating_gripper.yaml")
+    scenario.view_cameras = []
+    scenario.pile.parts[0].count = 5
+    records = run_demo(DemoOptions(picks=2, scenario=scenario, seed=2,
+                                   record=tmp_path / "demo.html"), lambda _: None)
+    first, second = records[:2]
+    html = (tmp_path / "demo.html").read_text()
+    camera, target = work_view(scenario)
+
+    def green_near(picture: np.ndarray, record: PickRecord) -> float:
+        (x, y), = frame_coordinates(camera, target, record.candidate.pose[None, :3, 3])
+        u, v = int((x + 1) / 2 * 1200), int((1 - y) / 2 * 800)
+        around = picture[max(v - 25, 0):v + 25, max(u - 25, 0):u + 25]
+        blue, green, red = around[..., 0], around[..., 1], around[..., 2]
+        chosen = (green > 190) & (green > red + 40) & (green > blue + 80)  # its green
+        return float(chosen.mean())
+
+    for now, other in ((first, second), (second, first)):
+        picture = _screenshot(html, now.started_at + 0.1, tmp_path / f"pick_{now.index}.png")
+        assert green_near(picture, now) > 0.005, now.index
+        assert green_near(picture, other) == 0.0, now.index
