@@ -142,11 +142,15 @@ def rank(rule: str, graspability: np.ndarray, p_not_tangled: np.ndarray | None =
 
 
 def harmonic_mean(*terms: np.ndarray) -> np.ndarray:
-    """The element-wise harmonic mean of non-negative ``terms``; 0 where any is 0."""
+    """The element-wise harmonic mean of non-negative ``terms``; 0 where any is 0.
+
+    As ``n prod(x) / sum_j prod_{i != j}(x_i)``, which for two terms is the paper's
+    ``2 g p / (g + p)`` to the last bit and needs no division by a zero term.
+    """
     stacked = np.stack(terms)
-    positive = (stacked > 0).all(axis=0)
-    inverse = np.divide(1.0, stacked, out=np.zeros_like(stacked), where=stacked > 0).sum(0)
-    return np.divide(len(terms), inverse, out=np.zeros_like(inverse), where=positive)
+    others = sum(np.delete(stacked, j, axis=0).prod(axis=0) for j in range(len(terms)))
+    return np.divide(len(terms) * stacked.prod(axis=0), others, out=np.zeros_like(others),
+                     where=others > 0)
 
 
 def _order(scores: np.ndarray, other: np.ndarray) -> np.ndarray:
