@@ -20,10 +20,7 @@ import cv2
 import numpy as np
 
 from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.graspability.hand import HandModel
-from tangle_drake.graspability.overlay import depth_preview, draw_candidates
-from tangle_drake.graspability.workmap import View
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.graspability.overlay import top_view
 from tangle_drake.pick.outcome import PickRecord
 
 GALLERY = "gallery"
@@ -45,14 +42,12 @@ def failure_kind(row: dict) -> str | None:
 def tile(depth: np.ndarray, record: PickRecord | None, intrinsics: CameraIntrinsics,
          caption: str) -> bytes:
     """A failed pick's tile as PNG bytes."""
-    picture = depth_preview(depth)
     chosen = None if record is None else record.candidate
+    picture = top_view(depth, [] if chosen is None else [chosen], intrinsics)
     if chosen is None:  # nothing chosen: the whole view, at half size
         small = cv2.resize(picture, (picture.shape[1] // 2, picture.shape[0] // 2),
                            interpolation=cv2.INTER_AREA)
     else:  # the chosen grasp's surroundings, at full size
-        picture = draw_candidates(picture, [chosen], HandModel.from_gripper(DEFAULT_GRIPPER),
-                                  View.of_camera(intrinsics))
         rows, cols = picture.shape[:2]
         u0 = int(np.clip(chosen.u - _WINDOW[0] / 2, 0, max(cols - _WINDOW[0], 0)))
         v0 = int(np.clip(chosen.v - _WINDOW[1] / 2, 0, max(rows - _WINDOW[1], 0)))

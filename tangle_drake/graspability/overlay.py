@@ -11,9 +11,11 @@ import math
 import cv2
 import numpy as np
 
+from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.graspability.candidates import GraspCandidate
 from tangle_drake.graspability.hand import HandModel
 from tangle_drake.graspability.workmap import View
+from tangle_drake.gripper import DEFAULT_GRIPPER
 
 _COLOURS = ((0, 200, 0), (0, 200, 255), (0, 140, 255), (0, 60, 255), (200, 0, 200))
 """BGR by rank: green for the best, then yellow to red, magenta for the rest."""
@@ -48,6 +50,14 @@ def draw_candidates(picture: np.ndarray, candidates: list[GraspCandidate], hand:
     for rank in reversed(range(len(candidates))):  # the best drawn last, on top
         _draw_hand(out, candidates[rank], rank, hand, view)
     return out
+
+
+def top_view(depth: np.ndarray, candidates: list[GraspCandidate],
+             intrinsics: CameraIntrinsics) -> np.ndarray:
+    """The top camera's metric ``depth`` as a picture with the robot's gripper drawn at each
+    of ``candidates`` (the pick pictures and the benchmark's gallery)."""
+    return draw_candidates(depth_preview(depth), candidates,
+                           HandModel.from_gripper(DEFAULT_GRIPPER), View.of_camera(intrinsics))
 
 
 def _draw_hand(out: np.ndarray, candidate: GraspCandidate, rank: int, hand: HandModel,

@@ -22,10 +22,7 @@ from pydrake.systems.sensors import CameraConfig
 
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.graspability.hand import HandModel
-from tangle_drake.graspability.overlay import depth_preview, draw_candidates
-from tangle_drake.graspability.workmap import View
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.graspability.overlay import top_view
 from tangle_drake.pick.diagram import PickDiagram
 from tangle_drake.pick.outcome import Outcome, PickRecord
 from tangle_drake.pick.planner import Mode
@@ -88,9 +85,7 @@ def pick_picture(record: PickRecord, intrinsics: CameraIntrinsics,
     band = max(_LINE * (len(record.view.ranked) + 2), TILE + 2 * _LINE)
     picture = np.zeros((height + band, 2 * width, 3), np.uint8)
 
-    top = draw_candidates(depth_preview(record.view.depth),
-                          [s.candidate for s in record.view.ranked],
-                          HandModel.from_gripper(DEFAULT_GRIPPER), View.of_camera(intrinsics))
+    top = top_view(record.view.depth, [s.candidate for s in record.view.ranked], intrinsics)
     chosen = record.candidate
     if chosen is not None:
         centre = (int(np.rint(chosen.u)), int(np.rint(chosen.v)))
