@@ -3,10 +3,10 @@ failure kind, so a reader sees why a method fails on a part.
 
 A tile is the top camera's depth view at pick time around the chosen grasp, its hand drawn
 (the whole view at half size where none was chosen), captioned with the method, part, trial
-and what happened. Workers draw the tiles
-(they have the image) and return them with the trial's result; the driver writes them under
-``gallery/<method>/<kind>/<part>_<trial>.png`` and ``gallery/index.md`` lists every failed pick
-of the run (a pick run before ``--gallery`` was asked for has no tile and says so).
+and what happened. Workers draw the tiles (they have the image) and return them with the
+trial's result; the driver writes them under ``gallery/<method>/<kind>/<part>_<trial>.png``
+and ``gallery/index.md`` lists every failed pick of the run (a pick run before ``--gallery``
+was asked for has no tile and says so).
 """
 
 from __future__ import annotations
@@ -73,18 +73,14 @@ def tile_path(directory: Path, part: str, trial: int, row: dict) -> Path:
             / f"{_safe(part)}_{trial:03d}.png")
 
 
-def save_tiles(directory: Path, result: dict) -> int:
-    """Write the tiles a trial's result carries (and take them out of it); how many."""
-    saved = 0
+def save_tiles(directory: Path, result: dict) -> None:
+    """Write the tiles a trial's result carries (and take them out of it)."""
     for row in result["picks"]:
         data = row.pop(TILE_KEY, None)
-        if data is None:
-            continue
-        path = tile_path(directory, result["part"], result["trial"], row)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(data)
-        saved += 1
-    return saved
+        if data is not None:
+            path = tile_path(directory, result["part"], result["trial"], row)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(data)
 
 
 def write_index(directory: Path, trials: Sequence[dict], methods: Sequence[str]) -> Path:

@@ -29,6 +29,7 @@ windows cut the image). Windows without two segments score 0.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -67,8 +68,8 @@ class EntanglementMap:
     """The image region it covers, (u0, v0, u1, v1), pixels, end exclusive."""
     image_shape: tuple[int, int]
 
-    def image(self) -> np.ndarray:
-        """The map over the whole image, float32 in [0, 1] (0 outside the region)."""
+    @cached_property
+    def _image(self) -> np.ndarray:
         u0, v0, u1, v1 = self.region
         out = np.zeros(self.image_shape, np.float32)
         grid = self.grid.astype(np.float32)
@@ -76,11 +77,18 @@ class EntanglementMap:
         scaled = (grid - grid.min()) / span if span > 0 else np.zeros_like(grid)
         out[v0:v1, u0:u1] = cv2.resize(scaled, (u1 - u0, v1 - v0),
                                        interpolation=cv2.INTER_LINEAR)
-        return np.clip(out, 0.0, 1.0)
+        out = np.clip(out, 0.0, 1.0)
+        out.flags.writeable = False  # shared by every caller
+        return out
+
+    def image(self) -> np.ndarray:
+        """The map over the whole image, float32 in [0, 1] (0 outside the region; read-only);
+        computed once per map, however often it is asked for."""
+        return self._image
 
     def at(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The scaled map (0-1) at pixels ``(u, v)`` (clipped into the image)."""
-        image = self.image()
+        image = self._image
         rows = np.clip(np.rint(np.asarray(v, dtype=np.float64)).astype(int), 0,
                        image.shape[0] - 1)
         cols = np.clip(np.rint(np.asarray(u, dtype=np.float64)).astype(int), 0,

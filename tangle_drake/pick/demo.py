@@ -122,14 +122,14 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     motion = motion_for(scenario)  # before any long work: the scenario must have a robot
     settings = pick_settings(scenario, max_picks=options.picks) if options.open_loop \
         else closed_loop_settings(scenario, max_picks=options.picks)
-    if options.meshcat or options.record:  # the candidates are drawn from each look
-        settings = replace(settings, record_view=True)
+    # Meshcat's candidate markers and the pictures are drawn from each look's record.
+    settings = replace(settings, record_view=bool(options.meshcat or options.record
+                                                  or options.pictures))
     if options.log_picks is None and options.pictures is None:
         return _run_demo(options, scenario, choice, settings, motion, say, None)
     model = load_tangle_model(choice.model) if choice.model else None
     crop = model.crop if model is not None else CropSpec.for_gripper()
-    settings = replace(settings, record_crop=crop,
-                       record_view=settings.record_view or options.pictures is not None)
+    settings = replace(settings, record_crop=crop)
     pictures = None if options.pictures is None else PickPictures(
         options.pictures, camera_model(scenario).intrinsics,
         model.normalisation if model is not None else None)

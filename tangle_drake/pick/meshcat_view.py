@@ -142,6 +142,11 @@ class CandidateMarkers:
 
     def _draw(self, path: str, record: PickRecord) -> None:
         g = self._gripper
+        half = g.max_opening / 2 + g.finger_thickness / 2
+        finger = Box(g.finger_width, g.finger_thickness, 0.004)
+        shapes = {"closing": (Box(0.002, g.max_opening, 0.002), RigidTransform()),
+                  "finger_a": (finger, RigidTransform([0.0, half, 0.0])),
+                  "finger_b": (finger, RigidTransform([0.0, -half, 0.0]))}
         others = iter(OTHER_RGBA)
         for rank, scored in enumerate(record.view.ranked):
             c = scored.candidate
@@ -149,13 +154,7 @@ class CandidateMarkers:
                 continue
             rgba = CHOSEN_RGBA if c is record.candidate else next(others, OTHER_RGBA[-1])
             X_WT = RigidTransform(np.asarray(c.pose))
-            half = g.max_opening / 2 + g.finger_thickness / 2
-            shapes = {"closing": (Box(0.002, g.max_opening, 0.002), [0.0, 0.0, 0.0]),
-                      "finger_a": (Box(g.finger_width, g.finger_thickness, 0.004),
-                                   [0.0, half, 0.0]),
-                      "finger_b": (Box(g.finger_width, g.finger_thickness, 0.004),
-                                   [0.0, -half, 0.0])}
-            for name, (shape, offset) in shapes.items():
+            for name, (shape, X_TS) in shapes.items():
                 where = f"{path}/{rank}/{name}"
                 self._meshcat.SetObject(where, shape, rgba)
-                self._meshcat.SetTransform(where, X_WT @ RigidTransform(offset))
+                self._meshcat.SetTransform(where, X_WT @ X_TS)

@@ -82,10 +82,10 @@ class PickSettings:
     repeat_angle_deg: float = 20.0
     repeat_depth: float = 0.005
     image_timeout: float = 1.0
-    """With the planner's ``image_time`` input connected: wait after ``settle_time`` this long
-    at most (s) for an image that arrived after the arm's last motion ended, then stop with
-    a ``STALE_IMAGE`` failure. An older image shows the pile as it was before the last pick:
-    a frozen camera must not drive a pick."""
+    """With the planner's ``camera.image_time`` input connected: wait after ``settle_time``
+    this long at most (s) for an image that arrived after the arm's last motion ended, then
+    stop with a ``STALE_IMAGE`` failure. An older image shows the pile as it was before the
+    last pick: a frozen camera must not drive a pick."""
     recovery: RecoverySettings | None = None
     """``None``: open loop (the paper's). Else weigh every lift and act on it."""
     record_crop: CropSpec | None = None
