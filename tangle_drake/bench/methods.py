@@ -40,7 +40,13 @@ from tangle_drake.graspability.roi import bin_roi
 from tangle_drake.pick.selection import trained_model_path
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import camera_model
-from tangle_drake.tangle_cnn.selection import RULES, needs_emap, needs_model, rank_candidates
+from tangle_drake.tangle_cnn.selection import (
+    RULES,
+    ScoredCandidate,
+    needs_emap,
+    needs_model,
+    rank_candidates,
+)
 
 DEFAULT_METHODS = ("random", "graspability", "cnn", "harmonic")
 """The methods a run compares unless told otherwise (every rule is a method, under its own
@@ -95,6 +101,9 @@ class MethodRun(NamedTuple):
 
     name: str
     seed: int
+    only: int | None = None
+    """Try graspability's candidate of this rank and no other (the physical-pick data's
+    labels: one pick per candidate); ``None``: the method's order."""
 
 
 class MethodSelector(LeafSystem):
@@ -124,20 +133,29 @@ class MethodSelector(LeafSystem):
 
     def _calc_scored(self, context: Context, value: AbstractValue) -> None:
         method = self._method.Eval(context)
-        if method.name in self._cnn:
+        if method.only is None and method.name in self._cnn:
             value.set_value(list(self._cnn[method.name][0].Eval(context)))
         else:
-            value.set_value(rank_candidates(method.name, list(self._candidates.Eval(context)),
-                                            seed=method.seed))
+            value.set_value(self._ranked(context, method))
 
     def _calc_selected(self, context: Context, value: AbstractValue) -> None:
         method = self._method.Eval(context)
-        if method.name in self._cnn:
+        if method.only is None and method.name in self._cnn:
             value.set_value(self._cnn[method.name][1].Eval(context))
         else:
-            scored = rank_candidates(method.name, list(self._candidates.Eval(context)),
-                                     seed=method.seed)
+            scored = self._ranked(context, method)
             value.set_value(scored[0].candidate if scored else None)
+
+    def _ranked(self, context: Context, method: MethodRun) -> list:
+        """The candidates of a rule that needs no system of its own, or graspability's
+        candidate ``method.only`` alone (none if there are fewer)."""
+        candidates = list(self._candidates.Eval(context))
+        if method.only is None:
+            return rank_candidates(method.name, candidates, seed=method.seed)
+        if method.only >= len(candidates):
+            return []
+        candidate = candidates[method.only]
+        return [ScoredCandidate(candidate, None, float(candidate.score))]
 
 
 def selection_wiring(methods: Sequence[Method], part: str, scenario: Scenario):

@@ -4,8 +4,8 @@ A trial is (part, trial index); its pile seed derives from (run seed, part, inde
 every method sees the same piles (the comparison is paired), whichever worker runs the trial
 and whenever (a resumed run redoes exactly the missing trials). The pile is dropped once in a
 bare copy of the station; its settled plant state is restored into the pick diagram before
-each method's pick. The worker (:class:`TrialWorker`) builds a part's station and pick diagram
-once and reuses them for every trial of that part.
+each method's pick (:mod:`.physical_pick`). The worker (:class:`TrialWorker`) builds a part's
+rig once and reuses it for every trial of that part.
 """
 
 from __future__ import annotations
@@ -13,29 +13,20 @@ from __future__ import annotations
 import hashlib
 import time
 import zlib
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from pydrake.systems.framework import Context
 
 from tangle_drake.bench.gallery import TILE_KEY, caption, failure_kind, timed_tile
-from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
-from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.bench.methods import Method, MethodRun
+from tangle_drake.bench.physical_pick import PickRig
 from tangle_drake.drivers.config import GantryDriver
 from tangle_drake.drivers.registry import carrier
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
-from tangle_drake.pick.demo import SIM_TIME_PER_PICK
-from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
-from tangle_drake.pick.episode import PickEpisode
 from tangle_drake.pick.outcome import Outcome, PickRecord
-from tangle_drake.pick.planner import Mode
-from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
-from tangle_drake.pile import PileSettler
-from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
-from tangle_drake.station import build_station, camera_model
 
 MODE_SCENARIOS = {"floating": "floating_gripper.yaml", "arm": "pick_demo.yaml"}
 """The shipped scenario of each ``--mode``: the gripper on the gantry, or on the Nextage."""
@@ -47,13 +38,6 @@ FAILURES = tuple(kind.value for kind in FailureKind)
 the robot could reach or reach without a collision, ..., or the pick did not finish within the
 simulated time allowed."""
 
-FLOATING_SIM_LIMIT = 20.0
-"""Simulated seconds a floating-gripper pick may take (one takes ~5 s)."""
-_POLL = 0.05
-"""Simulated seconds between checks whether the pick is over, s."""
-_UNTOUCHED = (Mode.SETTLE, Mode.PERCEIVE, Mode.APPROACH)
-"""Modes in which the robot does not reach into the bin: the settled pile stays locked
-(:meth:`TrialWorker._pick`)."""
 _PILE, _RANDOM = 0, 1
 
 
@@ -133,27 +117,13 @@ def classify(record: PickRecord | None) -> tuple[str, str | None]:
     return results[record.outcome], None
 
 
-@dataclass
-class _Rig:
-    """A part's pile settler and pick episode, built once per worker."""
-
-    settler: PileSettler
-    episode: PickEpisode
-    sim_limit: float
-    update_period: float
-    """The planner's: while the pile is locked, the driver looks at every update."""
-    methods: dict[str, Method] = field(default_factory=dict)
-    intrinsics: CameraIntrinsics | None = None
-    """The top camera's, for the gallery's tiles."""
-
-
 class TrialWorker:
     """Runs trials (``(part index, trial index)``) for a :class:`BenchConfig`; keeps each
     part's rig (~100 MB) once built, as trials come round-robin across the parts."""
 
     def __init__(self, config: BenchConfig) -> None:
         self.config = config
-        self._rigs: dict[str, _Rig] = {}
+        self._rigs: dict[str, PickRig] = {}
 
     def run_task(self, task: tuple[int, int]) -> dict:
         """One trial's result: the pile, and one pick per method (see ``results``)."""
@@ -163,7 +133,7 @@ class TrialWorker:
         rig = self._rig_for(spec)
         seed = pile_seed(self.config.seed, spec.name, trial)
         drop_start, drop_cpu = time.perf_counter(), time.process_time()
-        settled = rig.settler.settle(seed)
+        settled = rig.settle(seed)
         report = settled.report
         pile = {"seed": seed, "parts": report.num_parts, "in_bin": report.num_in_bin,
                 "settled": report.settled, "settle_s": round(report.settle_time, 3),
@@ -176,66 +146,24 @@ class TrialWorker:
         return {"part": spec.name, "trial": trial, "pile": pile, "picks": picks,
                 "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
 
-    def _rig_for(self, spec: PartSpec) -> _Rig:
+    def _rig_for(self, spec: PartSpec) -> PickRig:
         if spec.name not in self._rigs:
-            self._rigs[spec.name] = self._build(spec)
+            self._rigs[spec.name] = PickRig(part_scenario(self.config, spec),
+                                            self.config.methods[spec.name], spec.name,
+                                            floating=self.config.mode == "floating")
         return self._rigs[spec.name]
 
-    def _build(self, spec: PartSpec) -> _Rig:
-        scenario = part_scenario(self.config, spec)
-        methods = self.config.methods[spec.name]
-        floating = self.config.mode == "floating"
-        settings = pick_settings(scenario, max_picks=1)
-        if floating:
-            # The pile is at rest already, the gantry's stiff servos do not lag behind the
-            # descent as the arm does, and nothing is released after the count.
-            settings = replace(settings, settle_time=0.05, close_delay=0.05,
-                               release_time=_POLL)
-        pick = build_pick_diagram(
-            scenario, TangleChoice(None, FALLBACK_RULE),
-            motion_for(scenario, return_home=not floating), station=build_station(scenario),
-            settings=settings,
-            selection=selection_wiring(methods, spec.name, scenario))
-        return _Rig(PileSettler(build_station(scenario), scenario), PickEpisode(pick),
-                    FLOATING_SIM_LIMIT if floating else SIM_TIME_PER_PICK,
-                    settings.update_period, {m.name: m for m in methods},
-                    camera_model(scenario).intrinsics)
-
-    def _pick(self, rig: _Rig, state: np.ndarray, run: MethodRun, part: str,
+    def _pick(self, rig: PickRig, state: np.ndarray, run: MethodRun, part: str,
               trial: int) -> dict:
         start, cpu = time.perf_counter(), time.process_time()
-        diagram, station = rig.episode.pick.diagram, rig.episode.pick.station
-        depth = []
-        # The pile is at rest and nothing touches it until the descent: locked, it costs
-        # the contact solver nothing (the approach is a fifth of a floating pick).
-        locked = station.pile_bodies
-
-        def prepare(context: Context) -> None:
-            diagram.GetInputPort("method").FixValue(context, run)
-            depth.append(station.GetOutputPort("camera.depth_image").Eval(
-                station.GetMyContextFromRoot(context)))
-            for body in locked:
-                body.Lock(station.mutable_plant_context(context))
-
-        def step(mode: Mode) -> float:
-            nonlocal locked
-            if locked and mode not in _UNTOUCHED:
-                for body in locked:
-                    body.Unlock(station.mutable_plant_context(rig.episode.context))
-                locked = []
-            return rig.update_period if locked else _POLL
-
-        rig.episode.start(state, prepare)
-        result = rig.episode.run(rig.sim_limit, step=step)
-        record = result.records[0] if result.records else None
-        row = pick_row(run.name, record, {
-            "sim_s": round(result.time, 3), "wall_s": time.perf_counter() - start,
+        pick = rig.pick(state, run)
+        row = pick_row(run.name, pick.record, {
+            "sim_s": round(pick.sim_s, 3), "wall_s": time.perf_counter() - start,
             "cpu_s": time.process_time() - cpu,
-            "depth_digest": hashlib.sha256(np.asarray(depth[0].data).tobytes()).hexdigest()[:16]})
+            "depth_digest": hashlib.sha256(pick.depth.tobytes()).hexdigest()[:16]})
         if self.config.gallery and failure_kind(row) is not None:
             row[TILE_KEY], row["gallery_s"] = timed_tile(
-                np.asarray(depth[0].data)[:, :, 0], record, rig.intrinsics,
-                caption(run.name, part, trial, row))
+                pick.depth, pick.record, rig.intrinsics, caption(run.name, part, trial, row))
         return row
 
 

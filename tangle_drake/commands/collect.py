@@ -1,8 +1,12 @@
-"""``tangle-drake collect``: simulate picks on random piles and label them tangled or not.
+"""``tangle-drake collect``: simulate picks on random piles and label them.
 
-The paper's data simulator (section III-B): piles of one part type, graspability candidates,
-the part in the closing region lifted by a force, labelled *tangled* if anything else comes
-up. Resumable (run the same command again), parallel (``--workers``, ``--ray``).
+``--label lift`` (the default), the paper's data simulator (section III-B): piles of one part
+type, graspability candidates, the part in the closing region lifted by a force, labelled
+*tangled* if anything else comes up. ``--label pick``, the data of the seed's success/failure
+baseline: each of graspability's top candidates picked by the physically simulated gripper
+from the same restored pile, labelled by what came up (one part, several, none;
+:mod:`tangle_drake.tangle_data.physical`). Resumable (run the same command again), parallel
+(``--workers``, ``--ray``).
 """
 
 from __future__ import annotations
@@ -14,6 +18,9 @@ from pathlib import Path
 from tangle_drake.workers import add_worker_arguments
 
 DEFAULT_SAMPLES = 5100
+LABELS = ("lift", "pick")
+LIFT_ONLY = ("lifts_per_pile", "lift_height", "rise_threshold", "repeat", "full_depth")
+"""Options of the force lift, which physical picks do not have."""
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -24,7 +31,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "with a force and label the pick tangled if another part comes up (or "
                     "if two parts lie in the closing region). Stops once --out holds at "
                     "least --samples samples; run it again (or with a larger --samples) to "
-                    "resume or continue.")
+                    "resume or continue. --label pick instead picks each of the top "
+                    "candidates with the physically simulated gripper and labels it by what "
+                    "came up: one part, several or none.")
+    parser.add_argument("--label", choices=LABELS, default="lift",
+                        help="lift: the paper's force lift of the part in the closing region "
+                             "(tangled or not; default); pick: a physical pick of each top "
+                             "candidate (one part / several / none)")
     parser.add_argument("--part", required=True,
                         help="built-in part (u_hook, s_hook, c_ring, j_hook, e_shape) or a "
                              "mesh file (.obj, .stl, .ply)")
@@ -55,7 +68,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--full-depth", action="store_true",
                         help="also store each sample's whole depth image (~1.2 MB each)")
     parser.add_argument("--scenario", default=None,
-                        help="data scenario YAML (default: the shipped tangle_data.yaml)")
+                        help="data scenario YAML (default: the shipped tangle_data.yaml; "
+                             "with --label pick the benchmark's floating_gripper.yaml)")
     parser.set_defaults(func=run)
 
 
@@ -90,19 +104,43 @@ def settings_from_args(args: argparse.Namespace):
     return settings, scenario_text
 
 
-def _scenario_text(path: str | None) -> str:
+def _scenario_text(path: str | None, default: str | None = None) -> str:
+    """The scenario file's text; ``None``: the shipped ``default`` (tangle_data.yaml)."""
     from tangle_drake.errors import TangleDrakeError
+    from tangle_drake.paths import diagrams_dir
     from tangle_drake.tangle_data.collect import default_scenario_text
 
     if path is None:
-        return default_scenario_text()
+        return default_scenario_text() if default is None else \
+            (diagrams_dir() / default).read_text()
     try:
         return Path(path).read_text()
     except OSError as error:
         raise TangleDrakeError(f"cannot read scenario file {path}: {error.strerror}") from error
 
 
+def pick_settings_from_args(args: argparse.Namespace):
+    """The physical-pick settings the arguments ask for (``--label pick``)."""
+    from tangle_drake.errors import TangleDrakeError
+    from tangle_drake.tangle_data.physical import PICK_SCENARIO, PickDataSettings
+
+    given = [name for name in LIFT_ONLY if getattr(args, name) not in (None, False, 1)]
+    if given:
+        raise TangleDrakeError(f"--{given[0].replace('_', '-')} is an option of the force lift "
+                               "(--label lift); a physical pick has none")
+    settings = PickDataSettings(part=args.part, mesh_scale=args.mesh_scale, seed=args.seed,
+                                parts_per_pile=args.parts_per_pile)
+    if args.top_k is not None:
+        settings = replace(settings, top_k=args.top_k)
+    if args.crop_size is not None:
+        settings = replace(settings, crop=replace(settings.crop, size_m=args.crop_size))
+    settings.validate()
+    return settings, _scenario_text(args.scenario, PICK_SCENARIO)
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.label == "pick":
+        return run_picks(args)
     from tangle_drake.tangle_data.collect import collect
 
     settings, scenario_text = settings_from_args(args)
@@ -124,6 +162,31 @@ def run(args: argparse.Namespace) -> int:
         print(f"label agreement over {counts['repeat_lifts']} lifts x {settings.repeat}: all "
               f"agree {100 * counts['repeat_all_agree_fraction']:.1f} %, majority agreement "
               f"{100 * counts['repeat_majority_agreement']:.1f} %")
+    return _finish(result)
+
+
+def run_picks(args: argparse.Namespace) -> int:
+    from tangle_drake.tangle_data.collect import collect_picks
+
+    settings, scenario_text = pick_settings_from_args(args)
+    print(f"collecting {args.samples} physical picks of {settings.part} into {args.out}: "
+          f"the top {settings.top_k} candidates of each pile picked from the same pile, seed "
+          f"{settings.seed}")
+    result = collect_picks(settings, args.out, args.samples, workers=args.workers,
+                           ray_address=args.ray, scenario_text=scenario_text)
+    c = result.counts
+    print(f"{result.directory}: {c['samples']} picks from {c['tasks']} piles: one part "
+          f"{c['one']} ({_percent(c['one'], c['samples'])}), several {c['tangled']} "
+          f"({_percent(c['tangled'], c['samples'])}), none {c['none']} "
+          f"({_percent(c['none'], c['samples'])}); {c['failed']} candidates could not be "
+          "picked (no label)")
+    if result.new_tasks:
+        print(f"this run: {result.new_tasks} piles, "
+              f"{result.per_minute_per_worker:.1f} picks/min/worker")
+    return _finish(result)
+
+
+def _finish(result) -> int:
     if result.interrupted:
         print("interrupted: every finished pile is kept; run the same command again to "
               "resume where it stopped")

@@ -34,6 +34,11 @@ OUTCOME_CODES = {Verdict.NONE: 0, Verdict.ONE: 1, Verdict.SEVERAL: 2, Verdict.UN
 """The ``outcome`` field: what the first weighing said came up (-1: not sure)."""
 
 
+def tangled_label(outcome: int) -> int:
+    """The ``label`` (tangled) of an ``outcome`` code: several parts 1, one 0, else -1."""
+    return {OUTCOME_CODES[Verdict.SEVERAL]: 1, OUTCOME_CODES[Verdict.ONE]: 0}.get(outcome, -1)
+
+
 def pick_log_identity(part: str, crop: CropSpec, gripper: GripperSpec) -> dict:
     """What a pick log is bound to: a second run must log the same part, crop and gripper."""
     return {"source": SOURCE, "part": part, "crop": asdict(crop), "gripper": asdict(gripper),
@@ -54,7 +59,7 @@ def pick_sample(record: PickRecord, pile_seed: int, task: int, part: str) -> dic
 
     return {
         "crop": record.crop[None].astype(np.float32),
-        "label": one({2: 1, 1: 0}.get(outcome, -1), np.int8),
+        "label": one(tangled_label(outcome), np.int8),
         "score": one(c.score), "u": one(c.u), "v": one(c.v), "angle_deg": one(c.angle_deg),
         "depth_m": one(c.depth_m), "width_m": one(c.width_m),
         "rank": one(record.rank, np.int16), "pile_seed": one(pile_seed, np.int64),

@@ -13,16 +13,23 @@ import hashlib
 import itertools
 import sys
 from concurrent.futures import FIRST_COMPLETED, Future, wait
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from tangle_drake import __version__
+from tangle_drake.bench.trials import scenario_mode
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, PartModel, load_part
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.pile import check_pile
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import camera_model
+from tangle_drake.tangle_data.physical import (
+    PICK_SCENARIO,
+    PhysicalPickSimulator,
+    PickDataSettings,
+    pick_data_scenario,
+)
 from tangle_drake.tangle_data.progress import CollectProgress
 from tangle_drake.tangle_data.settings import CollectSettings
 from tangle_drake.tangle_data.simulator import TangleDataSimulator, TaskResult, data_scenario
@@ -46,7 +53,7 @@ def default_scenario_text() -> str:
     return (diagrams_dir() / DATA_SCENARIO).read_text()
 
 
-def collection_identity(settings: CollectSettings, scenario: Scenario,
+def collection_identity(settings: CollectSettings | PickDataSettings, scenario: Scenario,
                         part: PartModel) -> dict:
     """What the manifest binds a dataset to: settings, part (by content for a mesh file),
     the station's bin, camera and physics, and the format version of the tool."""
@@ -72,10 +79,7 @@ def collect(settings: CollectSettings, out: Path, samples: int, workers: int | N
             ray_address: str | None = None, scenario_text: str | None = None,
             show_progress: bool | None = None) -> CollectionResult:
     """Collect until ``out`` holds at least ``samples`` samples (Ctrl-C keeps what is done)."""
-    if samples < 1:
-        raise TangleDrakeError(f"--samples must be at least 1, got {samples}")
-    if workers is not None and workers < 1:
-        raise TangleDrakeError(f"--workers must be at least 1, got {workers}")
+    _check_counts(samples, workers)
     scenario_text = default_scenario_text() if scenario_text is None else scenario_text
     scenario = data_scenario(scenario_text, settings)
     part = load_part(settings.part, mesh_scale=settings.mesh_scale)  # builds the cache once
@@ -85,18 +89,53 @@ def collect(settings: CollectSettings, out: Path, samples: int, workers: int | N
     for notice in store.notices:
         print(f"notice: {notice}", file=sys.stderr)
     try:
-        return _run(store, settings, samples, workers, ray_address, scenario_text, part.name,
-                    show_progress)
+        return _run(store, TangleDataSimulator, (scenario_text, settings),
+                    settings.lifts_per_pile, settings.seed, samples, workers, ray_address,
+                    part.name, show_progress)
     finally:
         store.close()
 
 
-def _run(store: DatasetStore, settings: CollectSettings, samples: int, workers: int | None,
-         ray_address: str | None, scenario_text: str, name: str,
+def collect_picks(settings: PickDataSettings, out: Path, samples: int,
+                  workers: int | None = None, ray_address: str | None = None,
+                  scenario_text: str | None = None,
+                  show_progress: bool | None = None) -> CollectionResult:
+    """Collect physical-pick data (:mod:`.physical`) until ``out`` holds at least ``samples``
+    picks with an outcome (Ctrl-C keeps what is done)."""
+    _check_counts(samples, workers)
+    if scenario_text is None:
+        scenario_text = (diagrams_dir() / PICK_SCENARIO).read_text()
+    scenario = pick_data_scenario(scenario_text, settings)
+    scenario_mode(scenario, "the pick-data scenario")  # a gripper to pick with, or say so
+    settings = replace(settings, parts_per_pile=scenario.pile.total_count)
+    part = load_part(settings.part, mesh_scale=settings.mesh_scale)
+    for warning in check_pile(scenario):
+        print(warning, file=sys.stderr)
+    store = DatasetStore(out, collection_identity(settings, scenario, part))
+    for notice in store.notices:
+        print(f"notice: {notice}", file=sys.stderr)
+    try:
+        return _run(store, PhysicalPickSimulator, (scenario_text, settings), settings.top_k,
+                    settings.seed, samples, workers, ray_address, part.name, show_progress)
+    finally:
+        store.close()
+
+
+def _check_counts(samples: int, workers: int | None) -> None:
+    if samples < 1:
+        raise TangleDrakeError(f"--samples must be at least 1, got {samples}")
+    if workers is not None and workers < 1:
+        raise TangleDrakeError(f"--workers must be at least 1, got {workers}")
+
+
+def _run(store: DatasetStore, factory: type, args: tuple, per_task: int, seed: int,
+         samples: int, workers: int | None, ray_address: str | None, name: str,
          show_progress: bool | None) -> CollectionResult:
+    """Run ``factory(*args)``'s tasks until the store holds ``samples`` (a task makes about
+    ``per_task`` before any has finished)."""
     if store.totals["samples"] >= samples:
         return CollectionResult(store.directory, store.counts(), 0, False, 0.0)
-    backend = start_workers(TangleDataSimulator, (scenario_text, settings), workers, ray_address)
+    backend = start_workers(factory, args, workers, ray_address)
     progress = CollectProgress(name, samples, store.counts(), backend.capacity,
                                show_progress)
     pending: dict[Future, int] = {}
@@ -106,14 +145,14 @@ def _run(store: DatasetStore, settings: CollectSettings, samples: int, workers: 
     try:
         while True:
             while len(pending) < backend.capacity and \
-                    _expected(store, len(pending), settings) < samples:
+                    _expected(store, len(pending), per_task) < samples:
                 task = next(unfinished)
                 pending[backend.submit(task)] = task
             if not pending:
                 break
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in sorted(done, key=pending.__getitem__):
-                result = _result(future, pending.pop(future), settings.seed)
+                result = _result(future, pending.pop(future), seed)
                 store.add(result)
                 progress.task_done(result.stats)
                 new_tasks += 1
@@ -126,11 +165,11 @@ def _run(store: DatasetStore, settings: CollectSettings, samples: int, workers: 
                             progress.per_minute_per_worker())
 
 
-def _expected(store: DatasetStore, running: int, settings: CollectSettings) -> float:
+def _expected(store: DatasetStore, running: int, per_task: int) -> float:
     """Samples on disk plus those ``running`` tasks will likely add."""
     done = store.totals["tasks"]
-    per_task = store.totals["samples"] / done if done else settings.lifts_per_pile
-    return store.totals["samples"] + running * per_task
+    likely = store.totals["samples"] / done if done else per_task
+    return store.totals["samples"] + running * likely
 
 
 def _result(future: Future, task: int, seed: int) -> TaskResult:

@@ -17,7 +17,7 @@ class CollectProgress:
                  enabled: bool | None = None) -> None:
         self.samples = counts["samples"]
         self.tangled = counts["tangled"]
-        self.skipped = counts["empty_region"]
+        self.skipped = _skipped(counts)
         self.workers = workers
         self.new = 0
         self.start = time.perf_counter()
@@ -29,7 +29,7 @@ class CollectProgress:
     def task_done(self, stats: dict) -> None:
         self.samples += stats["samples"]
         self.tangled += stats["tangled"]
-        self.skipped += stats["empty_region"]
+        self.skipped += _skipped(stats)
         self.new += stats["samples"]
         self.bar.update(stats["samples"])
         self._postfix()
@@ -46,3 +46,9 @@ class CollectProgress:
 
     def close(self) -> None:
         self.bar.close()
+
+
+def _skipped(counts: dict) -> int:
+    """Candidates that gave no sample: an empty closing region (the auto-lift), or a pick
+    that could not be made (physical picks)."""
+    return counts.get("empty_region", 0) + counts.get("failed", 0)

@@ -35,8 +35,10 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_data.simulator import TaskResult
 
 COUNTED = ("samples", "tangled", "immediate", "lifts", "empty_region", "lift_errors",
-           "candidates", "repeat_lifts", "repeat_all_agree", "repeat_majority", "cpu_s")
-"""Task record fields the manifest sums over all finished tasks."""
+           "candidates", "repeat_lifts", "repeat_all_agree", "repeat_majority", "cpu_s",
+           "one", "none", "failed")
+"""Task record fields the manifest sums over all finished tasks (those a kind of data
+lacks count 0: ``one``, ``none`` and ``failed`` are the physical picks')."""
 
 
 def record_name(task: int) -> str:

@@ -1,0 +1,109 @@
+"""One physically simulated pick from a settled pile: the benchmark's trials and the physical-
+pick data of ``tangle-drake collect --label pick`` both run it, so the labels a model learns
+from are the outcomes the benchmark scores it by.
+
+A part's :class:`PickRig` holds a bare station to drop and settle piles in and a pick diagram
+(the real fingers, on the gantry or the Nextage) whose ``MethodSelector`` follows the method on
+its ``method`` input. Each pick restores a settled plant state into the diagram and runs it
+until its one pick is recorded. Until the robot reaches into the bin the pile's bodies are
+locked: at rest and untouched, they cost the contact solver nothing (the approach is a fifth
+of a floating pick), and unlocking them at the descent leaves them exactly where they lay.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+from pydrake.systems.framework import Context
+
+from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
+from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.pick.demo import SIM_TIME_PER_PICK
+from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
+from tangle_drake.pick.episode import PickEpisode
+from tangle_drake.pick.outcome import PickRecord
+from tangle_drake.pick.planner import Mode
+from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
+from tangle_drake.pile import PileSettler, SettledPile
+from tangle_drake.planning.motions import motion_for
+from tangle_drake.scenario import Scenario
+from tangle_drake.station import build_station, camera_model
+
+FLOATING_SIM_LIMIT = 20.0
+"""Simulated seconds a floating-gripper pick may take (one takes ~5 s)."""
+_POLL = 0.05
+"""Simulated seconds between checks whether the pick is over, s."""
+_UNTOUCHED = (Mode.SETTLE, Mode.PERCEIVE, Mode.APPROACH)
+"""Modes in which the robot does not reach into the bin: the settled pile stays locked."""
+
+
+@dataclass(frozen=True)
+class PhysicalPick:
+    """What one pick did, and what it was chosen on."""
+
+    record: PickRecord | None
+    """The planner's record of the pick; ``None``: it did not finish in the time allowed."""
+    sim_s: float
+    """Simulated time the pick took, s."""
+    depth: np.ndarray
+    """The top camera's depth image the grasp was chosen on, (H, W) metres."""
+
+
+class PickRig:
+    """A part's pile settler and one-pick episode, built once and reused pile after pile.
+
+    ``floating``: the gripper rides the gantry (the scenario's carrier), whose stiff servos do
+    not lag behind the descent as the arm does; the pile is at rest already and nothing is
+    released after the count, so the waits are short and the gripper does not go home.
+    """
+
+    def __init__(self, scenario: Scenario, methods: Sequence[Method], part: str,
+                 floating: bool) -> None:
+        settings = pick_settings(scenario, max_picks=1)
+        if floating:
+            settings = replace(settings, settle_time=0.05, close_delay=0.05,
+                               release_time=_POLL)
+        pick = build_pick_diagram(
+            scenario, TangleChoice(None, FALLBACK_RULE),
+            motion_for(scenario, return_home=not floating), station=build_station(scenario),
+            settings=settings, selection=selection_wiring(methods, part, scenario))
+        self.settler = PileSettler(build_station(scenario), scenario)
+        self.episode = PickEpisode(pick)
+        self.sim_limit = FLOATING_SIM_LIMIT if floating else SIM_TIME_PER_PICK
+        self.update_period = settings.update_period
+        """The planner's: while the pile is locked, the driver looks at every update."""
+        self.methods = {m.name: m for m in methods}
+        self.intrinsics: CameraIntrinsics = camera_model(scenario).intrinsics
+
+    def settle(self, seed: int) -> SettledPile:
+        """Drop and settle the pile made with ``seed``."""
+        return self.settler.settle(seed)
+
+    def pick(self, state: np.ndarray, run: MethodRun) -> PhysicalPick:
+        """Restore the settled plant ``state`` and make one pick as ``run`` says."""
+        episode = self.episode
+        diagram, station = episode.pick.diagram, episode.pick.station
+        depth = []
+        locked = station.pile_bodies
+
+        def prepare(context: Context) -> None:
+            diagram.GetInputPort("method").FixValue(context, run)
+            depth.append(station.GetOutputPort("camera.depth_image").Eval(
+                station.GetMyContextFromRoot(context)))
+            for body in locked:
+                body.Lock(station.mutable_plant_context(context))
+
+        def step(mode: Mode) -> float:
+            nonlocal locked
+            if locked and mode not in _UNTOUCHED:
+                for body in locked:
+                    body.Unlock(station.mutable_plant_context(episode.context))
+                locked = []
+            return self.update_period if locked else _POLL
+
+        episode.start(state, prepare)
+        result = episode.run(self.sim_limit, step=step)
+        record = result.records[0] if result.records else None
+        return PhysicalPick(record, result.time, np.asarray(depth[0].data)[:, :, 0].copy())

@@ -1,0 +1,184 @@
+"""Physical-pick data (``tangle-drake collect --label pick``): the outcome of real picks.
+
+The seed paper's second baseline (Matsumura et al. 2018) learns from simulated picks with the
+physical gripper, not from a force that lifts one part. A task here is one settled pile of the
+benchmark's scenario (the floating gripper by default): graspability's first ``top_k``
+candidates are picked one by one, each from the same settled pile restored
+(:class:`~tangle_drake.bench.physical_pick.PickRig`, the benchmark's own pick), and each is
+stored with what came up, counted by the simulation: ``outcome`` 1 = exactly one part,
+2 = several, 0 = none, in the codes of the pick log (:mod:`tangle_drake.pick.pick_log`), and
+``label`` (tangled) 1 = several, 0 = one, -1 = none. A candidate that could not be picked
+(unreachable, in collision) is no label: the task's record lists it with its reason. So the
+dataset says, per pile, what each of the five candidates would have done: the top-5 oracle.
+
+Pile seeds come from the collection seed (:mod:`.seeds`), not the benchmark's, so a model
+trained on these piles is tested on others.
+"""
+
+from __future__ import annotations
+
+import math
+import resource
+import time
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+
+from tangle_drake.bench.methods import Method, MethodRun
+from tangle_drake.bench.physical_pick import PhysicalPick, PickRig
+from tangle_drake.bench.trials import scenario_mode
+from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.crops import DEFAULT_CROP, CropSpec, extract_crop
+from tangle_drake.dataset import OPTIONAL_FIELDS, SAMPLE_FIELDS
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.failures import FailureKind
+from tangle_drake.parts import load_part
+from tangle_drake.pick import pick_log
+from tangle_drake.pick.outcome import Outcome
+from tangle_drake.pick.recovery import Verdict
+from tangle_drake.scenario import PartCount, Scenario, parse_scenario
+from tangle_drake.tangle_data.seeds import pile_seed
+from tangle_drake.tangle_data.simulator import TaskResult
+
+LABEL = "pick"
+"""The ``--label`` of physical-pick data (the auto-lift's is ``lift``)."""
+PICK_SCENARIO = "floating_gripper.yaml"
+"""The default scenario: the benchmark's floating gripper, so the data's picks are its picks."""
+OUTCOME_CODES = {outcome: pick_log.OUTCOME_CODES[verdict] for outcome, verdict in (
+    (Outcome.NONE, Verdict.NONE), (Outcome.ONE, Verdict.ONE), (Outcome.SEVERAL, Verdict.SEVERAL))}
+"""The ``outcome`` field, in the pick log's codes."""
+MAX_TOP_K = 20
+
+
+@dataclass(frozen=True)
+class PickDataSettings:
+    """One physical-pick collection."""
+
+    part: str
+    """A built-in part name, or a mesh file path."""
+    mesh_scale: float = 1.0
+    parts_per_pile: int | None = None
+    """``None``: the scenario's pile size (15 in the benchmark's scenario)."""
+    top_k: int = 5
+    """Graspability's first candidates picked per pile (the paper's top five)."""
+    seed: int = 0
+    crop: CropSpec = DEFAULT_CROP
+
+    def validate(self) -> None:
+        if not (math.isfinite(self.mesh_scale) and self.mesh_scale > 0):
+            raise TangleDrakeError(f"--mesh-scale must be positive, got {self.mesh_scale}")
+        if self.parts_per_pile is not None and self.parts_per_pile < 1:
+            raise TangleDrakeError(f"--parts-per-pile must be at least 1, got "
+                                   f"{self.parts_per_pile}")
+        if not 1 <= self.top_k <= MAX_TOP_K:
+            raise TangleDrakeError(f"--top-k must be between 1 and {MAX_TOP_K}, got "
+                                   f"{self.top_k}")
+        if not 0 <= self.seed < 2**63:
+            raise TangleDrakeError(f"--seed must be a non-negative 63-bit integer, got "
+                                   f"{self.seed}")
+        if not (math.isfinite(self.crop.size_m) and self.crop.size_m > 0):
+            raise TangleDrakeError(f"--crop-size must be positive, got {self.crop.size_m}")
+
+    def identity(self) -> dict:
+        """What a dataset is bound to (JSON-ready): appending needs the same."""
+        return {"label": LABEL, **asdict(self)}
+
+
+def pick_data_scenario(scenario_text: str, settings: PickDataSettings) -> Scenario:
+    """The scenario with its pile made of the part alone (its size kept unless set)."""
+    settings.validate()
+    scenario = parse_scenario(scenario_text, source="the pick-data scenario")
+    count = settings.parts_per_pile or scenario.pile.total_count
+    if count < 1:
+        raise TangleDrakeError("the pick-data scenario's pile has no parts: pass "
+                               "--parts-per-pile")
+    return replace(scenario, pile=replace(scenario.pile, parts=[
+        PartCount(settings.part, count, settings.mesh_scale)]))
+
+
+class PhysicalPickSimulator:
+    """Builds the part's pick rig once and runs tasks on it (one per settled pile)."""
+
+    def __init__(self, scenario_text: str, settings: PickDataSettings) -> None:
+        self.settings = settings
+        self.scenario = pick_data_scenario(scenario_text, settings)
+        self.part = load_part(settings.part, mesh_scale=settings.mesh_scale)
+        mode = scenario_mode(self.scenario, "the pick-data scenario")
+        self.rig = PickRig(self.scenario, [Method("graspability", "graspability")],
+                           self.part.name, floating=mode == "floating")
+
+    def run_task(self, task: int) -> TaskResult:
+        """Settle task ``task``'s pile and pick each of its first candidates from it."""
+        cpu, wall = time.process_time(), time.perf_counter()
+        s = self.settings
+        seed = pile_seed(s.seed, task)
+        settled = self.rig.settle(seed)
+        rows = PickRows(s, self.part.name, self.rig.intrinsics)
+        stats = {"task": task, "pile_seed": seed, "samples": 0, "tangled": 0, "one": 0,
+                 "none": 0, "failed": 0, "failures": [], "sim_s": 0.0,
+                 "pile": {"settled": settled.report.settled,
+                          "in_bin": settled.report.num_in_bin,
+                          "settle_time_s": settled.report.settle_time}}
+        for rank in range(s.top_k):
+            pick = self.rig.pick(settled.state, MethodRun("graspability", 0, only=rank))
+            record = pick.record
+            stats["sim_s"] += pick.sim_s
+            if record is not None and record.failure is FailureKind.NO_CANDIDATE:
+                break  # fewer candidates than top_k
+            if record is None or record.outcome not in OUTCOME_CODES:
+                why = FailureKind.TIMEOUT if record is None else record.failure
+                stats["failed"] += 1
+                stats["failures"].append({"rank": rank, "failure": why.value})
+                continue
+            rows.add(pick, rank, seed, task)
+            stats["samples"] += 1
+            stats["tangled"] += record.outcome is Outcome.SEVERAL
+            stats["one"] += record.outcome is Outcome.ONE
+            stats["none"] += record.outcome is Outcome.NONE
+        stats["candidates"] = stats["samples"] + stats["failed"]
+        stats["cpu_s"] = time.process_time() - cpu
+        stats["wall_s"] = time.perf_counter() - wall
+        stats["max_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        return TaskResult(task, rows.arrays(), stats)
+
+
+class PickRows:
+    """A task's picks as the dataset's arrays, one row per pick with an outcome."""
+
+    FIELDS = ("crop", "label", "score", "u", "v", "angle_deg", "depth_m", "width_m", "rank",
+              "pile_seed", "task", "num_in_region", "num_lifted", "num_hanging", "target",
+              "outcome", "sim_lifted", "sim_held", "pose", "part")
+
+    def __init__(self, settings: PickDataSettings, part: str,
+                 intrinsics: CameraIntrinsics) -> None:
+        self.settings = settings
+        self.part = part
+        self.intrinsics = intrinsics
+        self.rows: dict[str, list] = {name: [] for name in self.FIELDS}
+
+    def add(self, pick: PhysicalPick, rank: int, pile_seed: int, task: int) -> None:
+        record = pick.record
+        c = record.candidate
+        crop = extract_crop(pick.depth, self.intrinsics, c.u, c.v, c.angle_deg,
+                            c.depth_m, self.settings.crop)
+        code = OUTCOME_CODES[record.outcome]
+        row = {"crop": crop, "label": pick_log.tangled_label(code), "score": c.score,
+               "u": c.u, "v": c.v, "angle_deg": c.angle_deg, "depth_m": c.depth_m,
+               "width_m": c.width_m,
+               "rank": rank, "pile_seed": pile_seed, "task": task,
+               # What the auto-lift labeller counts; a physical pick does not.
+               "num_in_region": -1, "num_lifted": -1, "num_hanging": -1, "target": -1,
+               "outcome": code,
+               "sim_lifted": -1 if record.lifted is None else record.lifted,
+               "sim_held": -1 if record.held is None else record.held,
+               "pose": np.asarray(c.pose, dtype=np.float64), "part": self.part}
+        for name in self.FIELDS:
+            self.rows[name].append(row[name])
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The shard's arrays, with the right dtypes and shapes even when empty."""
+        dtypes = SAMPLE_FIELDS | OPTIONAL_FIELDS
+        shapes = {"crop": (self.settings.crop.size_px,) * 2, "pose": (4, 4)}
+        return {name: np.asarray(values, dtype=dtypes[name]) if values else
+                np.zeros((0, *shapes.get(name, ())), dtype=dtypes[name])
+                for name, values in self.rows.items()}

@@ -1,0 +1,117 @@
+"""Physical-pick data (``collect --label pick``): each top candidate picked by the simulated
+gripper from the same pile, labelled by the simulation's count, resumable to exactly the
+uninterrupted dataset; a forced candidate is that one alone; bad options are clear errors."""
+
+from functools import partial
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from cli_run import run_command
+
+from tangle_drake.bench.methods import MethodRun, MethodSelector
+from tangle_drake.dataset import finished_tasks, load_samples, read_manifest
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.tangle_data.collect import collect_picks
+from tangle_drake.tangle_data.physical import PhysicalPickSimulator, PickDataSettings
+
+SETTINGS = PickDataSettings(part="c_ring", parts_per_pile=4, top_k=2)
+SAMPLES = 3  # two piles of two picks
+FIELDS = ("outcome", "label", "rank", "task", "pile_seed", "sim_lifted", "u", "v", "crop")
+
+run_cli = partial(run_command, "collect")
+
+
+def _arrays(directory: Path) -> dict[str, np.ndarray]:
+    return load_samples(directory, FIELDS)
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("picks")
+    result = collect_picks(SETTINGS, out, SAMPLES, workers=1, show_progress=False)
+    assert not result.interrupted
+    return out
+
+
+def test_each_pick_is_labelled_by_what_the_simulation_saw_come_up(uninterrupted):
+    samples = _arrays(uninterrupted)
+    counts = read_manifest(uninterrupted)["counts"]
+    assert counts["tasks"] == 2
+    assert counts["samples"] + counts["failed"] == 4  # every candidate tried
+    assert counts["samples"] == len(samples["outcome"]) >= SAMPLES
+    assert counts["one"] + counts["tangled"] + counts["none"] == counts["samples"]
+    for outcome, lifted, label in zip(samples["outcome"], samples["sim_lifted"],
+                                      samples["label"], strict=True):
+        assert outcome == min(int(lifted), 2)  # none 0, one 1, several 2
+        assert label == {0: -1, 1: 0, 2: 1}[int(outcome)]  # tangled: several
+    for task in np.unique(samples["task"]):
+        mine = samples["task"] == task
+        assert len(np.unique(samples["pile_seed"][mine])) == 1  # one pile per task
+        assert set(samples["rank"][mine]) <= {0, 1}
+        picked = np.c_[samples["u"][mine], samples["v"][mine]]
+        assert len(np.unique(picked, axis=0)) == mine.sum()  # each rank its own candidate
+    assert np.isfinite(samples["crop"]).all()
+    assert read_manifest(uninterrupted)["label"] == "pick"
+
+
+def test_an_interrupted_collection_resumes_to_the_same_picks(uninterrupted, tmp_path,
+                                                              monkeypatch):
+    run_task = PhysicalPickSimulator.run_task
+
+    def interrupted_at_task_1(self, task):
+        if task == 1:
+            raise KeyboardInterrupt  # as Ctrl-C would, between two piles
+        return run_task(self, task)
+
+    monkeypatch.setattr(PhysicalPickSimulator, "run_task", interrupted_at_task_1)
+    first = collect_picks(SETTINGS, tmp_path, SAMPLES, workers=1, show_progress=False)
+    assert first.interrupted and finished_tasks(tmp_path) == {0}
+    monkeypatch.setattr(PhysicalPickSimulator, "run_task", run_task)
+    collect_picks(SETTINGS, tmp_path, SAMPLES, workers=1, show_progress=False)
+    assert finished_tasks(tmp_path) == finished_tasks(uninterrupted)
+    resumed, reference = _arrays(tmp_path), _arrays(uninterrupted)
+    for name in FIELDS:
+        assert resumed[name].tobytes() == reference[name].tobytes(), name
+    with pytest.raises(TangleDrakeError, match="other settings"):
+        collect_picks(PickDataSettings(part="c_ring", parts_per_pile=4, top_k=3), tmp_path,
+                      SAMPLES, workers=1, show_progress=False)
+
+
+def test_a_forced_candidate_is_that_candidate_alone():
+    candidates = [SimpleNamespace(u=float(i), v=0.0, angle_deg=0.0, score=1 - i / 10, pose=None)
+                  for i in range(4)]
+    switch = MethodSelector([])
+    context = switch.CreateDefaultContext()
+    switch.GetInputPort("candidates").FixValue(context, candidates)
+    for rank in range(6):
+        switch.GetInputPort("method").FixValue(context, MethodRun("graspability", 0, rank))
+        scored = switch.GetOutputPort("scored_candidates").Eval(context)
+        selected = switch.GetOutputPort("selected_grasp").Eval(context)
+        if rank < len(candidates):
+            assert [s.candidate for s in scored] == [candidates[rank]]
+            assert selected == candidates[rank]
+        else:
+            assert scored == [] and selected is None
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--repeat", "3"], "--repeat is an option of the force lift"),
+    (["--lift-height", "0.2"], "--lift-height"),
+    (["--top-k", "0"], "--top-k"),
+    (["--parts-per-pile", "0"], "--parts-per-pile"),
+    (["--scenario", "no_such.yaml"], "cannot read scenario"),
+])
+def test_bad_options_are_clear_errors(argv, message, tmp_path):
+    with pytest.raises(TangleDrakeError, match=message):
+        run_cli("--label", "pick", "--part", "c_ring", *argv, "--out", str(tmp_path / "d"))
+
+
+def test_a_scenario_without_a_gripper_to_pick_with_is_refused(tmp_path):
+    from tangle_drake.paths import diagrams_dir
+
+    text = (diagrams_dir() / "pile_only.yaml").read_text()
+    with pytest.raises(TangleDrakeError, match="picks"):
+        collect_picks(SETTINGS, tmp_path / "d", 1, workers=1, scenario_text=text,
+                      show_progress=False)
