@@ -8,7 +8,10 @@ method              the candidate tried first
 ``graspability``    the best graspability index (Domae et al. 2014), no CNN
 ``cnn``             the highest P(not tangled) from the part's tangle CNN
 ``harmonic``        the paper's harmonic mean of the two, with the part's tangle CNN
-``model:PATH``      the harmonic mean with the checkpoint at PATH (any part of the run)
+``model:PATH``      the harmonic mean with the checkpoint at PATH (any part of the run); a
+                    success/failure checkpoint ranks by its P(success) instead
+``success-cnn``     the seed's second baseline (Matsumura et al. 2018): the highest P(success)
+                    from the part's success/failure CNN, ``trained/<part>.success.pt``
 ``emap``            Zhang et al. 2021: graspability re-ranked by low entanglement (the
                     topological entanglement map, no training)
 ``emap-harmonic``   the harmonic mean of graspability, P(not tangled) and 1 - entanglement
@@ -37,9 +40,10 @@ from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem, Outpu
 from tangle_drake.bin_model import inner_corners
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability.roi import bin_roi
-from tangle_drake.pick.selection import trained_model_path
+from tangle_drake.pick.selection import default_rule, trained_model_path
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import camera_model
+from tangle_drake.tangle_cnn.objectives import rule_objective
 from tangle_drake.tangle_cnn.selection import (
     RULES,
     ScoredCandidate,
@@ -75,16 +79,17 @@ class Method:
 
     def model_for(self, part: str) -> Path:
         """The checkpoint this method uses on ``part`` (which may not exist)."""
-        return self.model if self.model is not None else trained_model_path(part)
+        return self.model if self.model is not None else \
+            trained_model_path(part, rule_objective(self.rule).name)
 
 
 def parse_method(text: str) -> Method:
-    """``random``, ``graspability``, ``cnn``, ``harmonic`` or ``model:PATH``."""
+    """A rule's name, or ``model:PATH`` (the rule the checkpoint's objective picks with)."""
     if text.startswith(MODEL_PREFIX):
         path = Path(text[len(MODEL_PREFIX):]).expanduser()
         if not path.is_file():
             raise TangleDrakeError(f"method {text!r}: model file not found: {path}")
-        return Method(f"{MODEL_PREFIX}{path}", "harmonic", path.resolve())
+        return Method(f"{MODEL_PREFIX}{path}", default_rule(path), path.resolve())
     if text not in RULES:
         raise TangleDrakeError(f"unknown method {text!r}; choose from "
                                f"{', '.join(DEFAULT_METHODS)} or model:PATH")

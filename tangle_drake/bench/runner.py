@@ -33,6 +33,7 @@ from tangle_drake.bench.trials import (
     PartSpec,
     TrialWorker,
     part_scenario,
+    pile_seed,
     scenario_mode,
 )
 from tangle_drake.errors import TangleDrakeError
@@ -42,6 +43,7 @@ from tangle_drake.pick.selection import model_part_notice
 from tangle_drake.pile import check_pile
 from tangle_drake.scenario import parse_scenario
 from tangle_drake.scenario_files import scenario_path
+from tangle_drake.tangle_cnn.objectives import rule_objective
 from tangle_drake.workers import start_workers
 
 DEFAULT_TRIALS = 50
@@ -144,14 +146,16 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
                                                         pile_size=pile_size), spec))
         missing = [m for m in methods if m.needs_model and not m.model_for(spec.name).is_file()]
         if missing and explicit:
+            objective = rule_objective(missing[0].rule)
             raise TangleDrakeError(
-                f"method {missing[0].name!r} needs a tangle model for part {spec.name!r}, and "
-                f"{missing[0].model_for(spec.name)} does not exist: train one (`tangle-drake "
-                "collect`, `tangle-drake train`) and install it there, or pass model:PATH")
+                f"method {missing[0].name!r} needs a model of {objective.probability} for part "
+                f"{spec.name!r}, and {missing[0].model_for(spec.name)} does not exist: train "
+                f"one (data from {objective.data}, then `tangle-drake train --objective "
+                f"{objective.name}`) and install it there, or pass model:PATH")
         if missing:
-            notices.append(f"notice: no trained tangle model for part {spec.name!r} "
-                           f"({missing[0].model_for(spec.name)}): methods "
-                           f"{', '.join(m.name for m in missing)} skipped on it")
+            notices.append(f"notice: no trained model for part {spec.name!r} "
+                           f"({', '.join(str(m.model_for(spec.name)) for m in missing)}): "
+                           f"methods {', '.join(m.name for m in missing)} skipped on it")
         per_part[spec.name] = tuple(m for m in methods if m not in missing)
         notices += [note for m in per_part[spec.name] if m.model is not None
                     and (note := model_part_notice(m.model, spec.name))]
@@ -166,7 +170,29 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
                          options.clear, options.open_loop, options.gallery)
     if options.clear and not options.open_loop:
         closed_loop_settings(scenario)  # a tray and a wrist sensor, or a clear error now
+    notices += overlap_warnings(config, trials)
     return config, trials, notices
+
+
+def overlap_warnings(config: BenchConfig, trials: int) -> list[str]:
+    """A warning for each model that was trained on piles this run tests on (its checkpoint
+    lists its piles' seeds; older checkpoints do not, and are not checked)."""
+    from tangle_drake.tangle_cnn.checkpoint import read_checkpoint  # imports torch
+
+    warnings = []
+    for spec in config.parts:
+        tested = {pile_seed(config.seed, spec.name, t) for t in range(trials)}
+        for method in config.methods[spec.name]:
+            if not method.needs_model:
+                continue
+            path = method.model_for(spec.name)
+            trained = set((read_checkpoint(path).get("data") or {}).get("pile_seeds") or ())
+            if shared := tested & trained:
+                warnings.append(f"warning: {path} was trained on {len(shared)} of the "
+                                f"{len(tested)} {spec.name} piles this run tests {method.name} "
+                                "on: its figures there are not a test; collect its data with "
+                                "another --seed")
+    return warnings
 
 
 def _unique(names: list[str], what: str) -> None:

@@ -72,7 +72,7 @@ def _report(result, model_path: Path) -> str:
     low, high = result.accuracy_interval
     lines = [
         f"{model_path} on {result.data} ({result.scope}): {result.samples} samples, "
-        f"{result.tangled} tangled, {result.piles} piles",
+        f"{result.tangled} {result.classes[1]}, {result.piles} piles",
         f"accuracy {share(result.accuracy)} [{100 * low:.1f}, {100 * high:.1f}]  "
         f"balanced accuracy {share(result.balanced_accuracy)}  "
         f"precision {share(result.precision)}  recall {share(result.recall)}  "
@@ -80,7 +80,8 @@ def _report(result, model_path: Path) -> str:
     ]
     if result.groups:
         width = max(len(group.name) for group in result.groups)
-        lines.append(f"{'label came about as':{width}}  samples  right   mean P(tangled)")
+        lines.append(f"{'label came about as':{width}}  samples  right   "
+                     f"mean P({result.classes[1]})")
         for group in result.groups:
             right = share(group.correct / group.samples) if group.samples else "n/a"
             mean = "n/a" if group.mean_p_tangled is None else f"{group.mean_p_tangled:.2f}"

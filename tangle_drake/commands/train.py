@@ -20,6 +20,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "finished epoch when the same command is run again.")
     parser.add_argument("--data", type=Path, required=True, help="dataset directory")
     parser.add_argument("--out", type=Path, required=True, help="checkpoint to write (.pt)")
+    from tangle_drake.tangle_cnn.objectives import OBJECTIVES
     from tangle_drake.tangle_cnn.train_settings import AUGMENTATIONS, TrainSettings
 
     default = TrainSettings()
@@ -41,6 +42,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--no-target-mask", dest="target_mask", action="store_false",
                         help="train on the depth crop alone (the paper's input), without the "
                              "channel marking the target part")
+    parser.add_argument("--objective", choices=tuple(OBJECTIVES), default=default.objective,
+                        help="tangled (default): the paper's tangle CNN, from the tangle "
+                             "labels; success: the seed's success/failure baseline, from the "
+                             "outcomes of physical picks (collect --label pick), ranked by "
+                             "P(success) with the success-cnn rule")
     parser.add_argument("--device", choices=("auto", "cpu", "cuda"), default="auto",
                         help="auto: CUDA when available, else the CPU")
     parser.add_argument("--restart", action="store_true",
@@ -55,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
 
     settings = TrainSettings(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
                              seed=args.seed, patience=args.patience, augment=args.augment,
-                             target_mask=args.target_mask)
+                             target_mask=args.target_mask, objective=args.objective)
     try:
         metrics = train(args.data, args.out, settings, device=args.device,
                         restart=args.restart, log=tqdm.write)

@@ -16,6 +16,12 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem
 
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.tangle_cnn.objectives import (
+    DEFAULT_OBJECTIVE,
+    DEFAULT_RULES,
+    checkpoint_objective,
+    rule_objective,
+)
 from tangle_drake.tangle_cnn.selection import check_rule, needs_model, rank_candidates
 
 TRAINED_DIR = Path(__file__).resolve().parent.parent / "trained"
@@ -34,18 +40,21 @@ class TangleChoice:
     """Something the user should read (a fallback), or ``None``."""
 
 
-def trained_model_path(part: str) -> Path:
-    """Where the shipped model for ``part`` (a built-in name or a mesh's stem) would be."""
-    return TRAINED_DIR / f"{Path(part).stem}.pt"
+def trained_model_path(part: str, objective: str = DEFAULT_OBJECTIVE) -> Path:
+    """Where the shipped model of ``objective`` for ``part`` (a built-in name or a mesh's
+    stem) would be: ``<part>.pt`` for the tangle CNN, ``<part>.<objective>.pt`` else."""
+    suffix = "" if objective == DEFAULT_OBJECTIVE else f".{objective}"
+    return TRAINED_DIR / f"{Path(part).stem}{suffix}.pt"
 
 
 def resolve_tangle_choice(part: str, rule: str | None = None,
                           model: str | Path | None = None) -> TangleChoice:
     """The model and rule for picking ``part``.
 
-    ``model`` (a checkpoint path) wins; else the shipped ``trained/<part>.pt``; else no model,
-    which allows the rules that need no CNN (``graspability``, the default then, and
-    ``random``). ``rule`` defaults to ``harmonic`` with a model.
+    ``model`` (a checkpoint path) wins; else the shipped ``trained/<part>.pt`` (for
+    ``success-cnn``, ``trained/<part>.success.pt``); else no model, which allows the rules that
+    need no CNN (``graspability``, the default then, and ``random``). ``rule`` defaults to
+    ``harmonic`` with a model (``success-cnn`` with a success/failure ``model``).
     Raises ``TangleDrakeError`` for an unknown rule, a missing ``model`` file, or a rule that
     needs a model when there is none.
     """
@@ -55,8 +64,8 @@ def resolve_tangle_choice(part: str, rule: str | None = None,
         path = Path(model)
         if not path.is_file():
             raise TangleDrakeError(f"model file not found: {path}")
-        return TangleChoice(path, rule or "harmonic")
-    shipped = trained_model_path(part)
+        return TangleChoice(path, rule or default_rule(path))
+    shipped = trained_model_path(part, rule_objective(rule).name if rule else DEFAULT_OBJECTIVE)
     if shipped.is_file():
         return TangleChoice(shipped, rule or "harmonic")
     if rule is not None and needs_model(rule):
@@ -70,6 +79,14 @@ def resolve_tangle_choice(part: str, rule: str | None = None,
         f"selecting by the {FALLBACK_RULE} index alone. Train one with `tangle-drake train` "
         f"and pass --model, or install it there, for the paper's harmonic rule.")
     return TangleChoice(None, FALLBACK_RULE, notice)
+
+
+def default_rule(model: Path) -> str:
+    """The rule the checkpoint at ``model`` picks with unless told: ``harmonic`` for a tangle
+    CNN, ``success-cnn`` for a success/failure CNN."""
+    from tangle_drake.tangle_cnn.checkpoint import read_checkpoint  # imports torch
+
+    return DEFAULT_RULES[checkpoint_objective(read_checkpoint(Path(model))).name]
 
 
 def model_part_notice(model: Path, part: str) -> str | None:

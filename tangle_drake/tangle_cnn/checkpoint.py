@@ -22,6 +22,8 @@ data           data summary: path, fingerprint, counts, split sizes, manifest
 training       the training settings (``TrainSettings``)
 metrics        the chosen (lowest validation loss) epoch's metrics, epochs run, stop reason
 state_dict     the network's weights
+objective      what the model predicts (:mod:`.objectives`); absent before objectives
+               existed, which means ``tangled``
 ============== ==========================================================================
 
 The training state (next to it, ``<out stem>.state.pt``) adds the last epoch's weights and the
@@ -40,6 +42,7 @@ from tangle_drake.crops import CropSpec
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import Normalisation
+from tangle_drake.tangle_cnn.objectives import DEFAULT_OBJECTIVE
 
 FORMAT_VERSION = 1
 MODEL_KIND = "tangle_drake.tangle_cnn.model"
@@ -53,12 +56,13 @@ STATE_KEYS = ("kind", "version", "settings", "fingerprint", "epoch", "weights", 
 def model_checkpoint(config: NetworkConfig, crop: CropSpec, normalisation: Normalisation,
                      weights: dict[str, torch.Tensor], *, gripper: dict | None = None,
                      part: str | None = None, data: dict | None = None,
-                     training: dict | None = None, metrics: dict | None = None) -> dict:
+                     training: dict | None = None, metrics: dict | None = None,
+                     objective: str = DEFAULT_OBJECTIVE) -> dict:
     """The model checkpoint's dict (see the table above), ready for :func:`save_atomic`."""
     return {"kind": MODEL_KIND, "version": FORMAT_VERSION, "network": config.to_dict(),
             "crop": asdict(crop), "normalisation": normalisation.to_dict(), "gripper": gripper,
             "part": part, "data": data, "training": training, "metrics": metrics,
-            "state_dict": weights}
+            "state_dict": weights, "objective": objective}
 
 
 def save_atomic(data: dict, path: Path) -> None:

@@ -26,6 +26,7 @@ from tangle_drake.dataset import stored_fields
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.metrics import balanced_accuracy, binary_metrics
 from tangle_drake.tangle_cnn.model import TangleModel
+from tangle_drake.tangle_cnn.objectives import SUCCESS, TANGLED
 from tangle_drake.tangle_cnn.split import split_by_pile, undersample
 from tangle_drake.tangle_cnn.training_data import fingerprint, load_checked_samples
 
@@ -70,6 +71,10 @@ class Evaluation:
     auc: float | None
     groups: tuple[Group, ...]
     """By cause of the label; empty when the dataset does not record the causes."""
+    objective: str = TANGLED.name
+    """What the model predicts (:mod:`.objectives`); ``tangled`` counts its class 1
+    (tangled, or failure), ``precision`` and ``recall`` are that class's."""
+    classes: tuple[str, str] = TANGLED.classes
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -81,7 +86,8 @@ def evaluate_model(model: TangleModel, directory: Path,
     validation piles) with ``model``; ``progress(n)`` is told of each batch of n samples."""
     directory = Path(directory)
     causes = CAUSE_FIELDS if set(CAUSE_FIELDS) <= stored_fields(directory) else ()
-    samples, crop, manifest = load_checked_samples(directory, causes)
+    objective = model.objective
+    samples, crop, manifest = load_checked_samples(directory, causes, objective)
     labels = samples["label"].astype(np.int64)
     _check_crop(model.crop, crop, directory)
     rows, scope = _scored_rows(model, samples, labels)
@@ -102,7 +108,9 @@ def evaluate_model(model: TangleModel, directory: Path,
         accuracy=float(metrics["accuracy"]), accuracy_interval=wilson(correct, len(rows)),
         balanced_accuracy=balanced_accuracy(truth, p_tangled), precision=metrics["precision"],
         recall=metrics["recall"], auc=metrics["auc"],
-        groups=_groups(samples, manifest, rows, truth, p_tangled))
+        groups=(_outcome_groups(samples, rows, truth, p_tangled) if objective is SUCCESS else
+                _groups(samples, manifest, rows, truth, p_tangled)),
+        objective=objective.name, classes=objective.classes)
 
 
 def _check_crop(model_crop: CropSpec, data_crop: CropSpec, directory: Path) -> None:
@@ -127,6 +135,18 @@ def _scored_rows(model: TangleModel, samples: dict[str, np.ndarray],
     return (undersample(validation, labels, seed),
             "the model's validation piles (this is its training data), classes balanced as in "
             "training")
+
+
+def _outcome_groups(samples: dict[str, np.ndarray], rows: np.ndarray, truth: np.ndarray,
+                    p_failure: np.ndarray) -> tuple[Group, ...]:
+    """A success/failure model's figures by what the physical pick brought up."""
+    outcome = samples["outcome"][rows]
+    right = (p_failure > 0.5) == (truth == 1)
+    names = {2: "failure: several parts came up", 0: "failure: no part came up",
+             1: "success: exactly one part came up"}
+    return tuple(Group(name, int(chosen.sum()), int(right[chosen].sum()),
+                       float(p_failure[chosen].mean()) if chosen.any() else None)
+                 for code, name in names.items() for chosen in [outcome == code])
 
 
 def _groups(samples: dict[str, np.ndarray], manifest: dict, rows: np.ndarray,

@@ -15,6 +15,7 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.checkpoint import network_from, read_checkpoint
 from tangle_drake.tangle_cnn.network import TangleNet
 from tangle_drake.tangle_cnn.normalise import Normalisation
+from tangle_drake.tangle_cnn.objectives import Objective, checkpoint_objective
 
 INFERENCE_THREADS = 1
 """Threads of one prediction. A handful of 96 px crops is too little work to share: on two
@@ -29,7 +30,7 @@ class TangleModel:
     they leave as it was)."""
 
     def __init__(self, network: TangleNet, crop: CropSpec, normalisation: Normalisation,
-                 info: dict | None = None) -> None:
+                 info: dict | None = None, source: str = "the model") -> None:
         if crop.size_px != network.config.input_size:
             raise TangleDrakeError(f"crop of {crop.size_px} px does not fit the network's "
                                    f"{network.config.input_size} px input")
@@ -42,9 +43,14 @@ class TangleModel:
         self.normalisation = normalisation
         self.info = info or {}
         """The checkpoint's metadata (everything but the weights)."""
+        self.objective: Objective = checkpoint_objective(self.info)
+        """What :meth:`predict` gives the probability of (P(not tangled) for a tangle CNN)."""
+        self.source = source
+        """Where the model came from (its file), for messages."""
 
     def predict(self, crops: np.ndarray, grasp_depths: np.ndarray) -> np.ndarray:
-        """P(not tangled), (N,) float32, of (N, S, S) metric crops at (N,) fingertip depths."""
+        """P(not tangled) (the objective's good class: P(success) for a success CNN), (N,)
+        float32, of (N, S, S) metric crops at (N,) fingertip depths."""
         crops = np.asarray(crops, dtype=np.float32)
         grasp_depths = np.asarray(grasp_depths, dtype=np.float32)
         size = self.crop.size_px
@@ -95,6 +101,7 @@ def load_tangle_model(path: Path | str) -> TangleModel:
         raise TangleDrakeError(f"{path}: invalid crop spec or normalisation: {error}") from None
     try:
         return TangleModel(network, crop, normalisation,
-                           {key: value for key, value in data.items() if key != "state_dict"})
+                           {key: value for key, value in data.items() if key != "state_dict"},
+                           source=str(path))
     except TangleDrakeError as error:
         raise TangleDrakeError(f"{path}: {error}") from None

@@ -8,6 +8,9 @@ Rules (``RULES``), over the candidates of one image (graspability's top-k, best 
   chance of being drawn;
 - ``graspability``: the highest graspability score (the method without the CNN);
 - ``cnn``: the highest P(not tangled);
+- ``success-cnn`` (the seed's second baseline, Matsumura et al. 2018): the highest P(success)
+  from a success/failure CNN trained on physical picks (:mod:`.objectives`); it arrives where
+  the others' P(not tangled) does;
 - ``harmonic`` (the paper): the highest harmonic mean ``2 g p / (g + p)`` of the normalised
   graspability ``g`` and ``p`` = P(not tangled). Graspability is normalised by the best score
   among the image's candidates, ``g = score / max(score)``, so the best candidate has ``g = 1``
@@ -22,7 +25,7 @@ Rules (``RULES``), over the candidates of one image (graspability's top-k, best 
 
 :func:`rank` orders every candidate, best first, which is the order the planner tries them
 in: by the rule's score; ties go to the candidate that is better on the other term
-(P(not tangled) for ``graspability``, where known, graspability for ``cnn`` and ``harmonic``),
+(P(not tangled) for ``graspability``, where known, graspability for the CNN rules),
 then to the earlier one. After ``random``'s draw come the others in graspability's order.
 ``cnn``, ``harmonic`` and ``emap-harmonic`` need the tangle CNN (:data:`MODEL_RULES`), the
 ``emap`` rules the entanglement map (:data:`EMAP_RULES`). Numpy only.
@@ -37,10 +40,11 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.tangle_cnn.objectives import rule_objective
 
-RULES = ("random", "graspability", "cnn", "harmonic", "emap", "emap-harmonic")
-MODEL_RULES = ("cnn", "harmonic", "emap-harmonic")
-"""The rules that need P(not tangled), hence a trained tangle CNN."""
+RULES = ("random", "graspability", "cnn", "harmonic", "emap", "emap-harmonic", "success-cnn")
+MODEL_RULES = ("cnn", "harmonic", "emap-harmonic", "success-cnn")
+"""The rules that need a trained CNN's probability (which model: :mod:`.objectives`)."""
 EMAP_RULES = ("emap", "emap-harmonic")
 """The rules that need each candidate's entanglement (the entanglement map)."""
 RANDOM_TOP_K = 5
@@ -112,7 +116,7 @@ def rank(rule: str, graspability: np.ndarray, p_not_tangled: np.ndarray | None =
     g = np.asarray(graspability, dtype=np.float64)
     if p_not_tangled is None:
         if needs_model(rule):
-            raise ValueError(f"the {rule} rule needs P(not tangled)")
+            raise ValueError(f"the {rule} rule needs {rule_objective(rule).probability}")
         p = np.zeros_like(g)
     else:
         p = np.asarray(p_not_tangled, dtype=np.float64)
@@ -127,7 +131,7 @@ def rank(rule: str, graspability: np.ndarray, p_not_tangled: np.ndarray | None =
         return _random(g, p, np.asarray(poses), seed)
     if rule == "graspability":
         scores, other = g, p
-    elif rule == "cnn":
+    elif rule in ("cnn", "success-cnn"):
         scores, other = p, g
     elif rule == "harmonic":
         scores, other = harmonic_mean(normalised_graspability(g), p), g

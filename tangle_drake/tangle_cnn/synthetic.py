@@ -68,11 +68,21 @@ def synthetic_samples(count: int, size_px: int, seed: int,
 
 
 def write_synthetic_dataset(directory: Path, count: int, size_px: int = 32,
-                            size_m: float = 0.05, seed: int = 0) -> CropSpec:
-    """A dataset directory in the collector's format: one shard per pile, a manifest."""
+                            size_m: float = 0.05, seed: int = 0,
+                            outcomes: bool = False) -> CropSpec:
+    """A dataset directory in the collector's format: one shard per pile, a manifest.
+
+    ``outcomes``: as physical picks record them (``collect --label pick``): separate bars
+    brought up one part (``outcome`` 1), crossing bars several (2) or, every other one, none
+    (0, no tangle label)."""
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     samples = synthetic_samples(count, size_px, seed)
+    if outcomes:
+        crossing = samples["label"] == 1
+        samples["outcome"] = np.where(crossing, np.where(np.arange(count) % 4 == 1, 2, 0),
+                                      1).astype(np.int8)
+        samples["label"] = np.where(samples["outcome"] == 0, -1, samples["label"])
     for task in np.unique(samples["task"]):
         rows = samples["task"] == task
         write_shard(directory, int(task), {name: array[rows] for name, array in samples.items()})

@@ -31,6 +31,7 @@ from pydrake.systems.sensors import ImageDepth32F
 
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.tangle_cnn.model import TangleModel, load_tangle_model
+from tangle_drake.tangle_cnn.objectives import check_serves
 from tangle_drake.tangle_cnn.selection import ScoredCandidate, check_rule, rank_candidates
 
 WARM_UP_CANDIDATES = 16
@@ -52,10 +53,11 @@ class TangleCnnSystem(LeafSystem):
         not pay torch's first-call costs (0: do not)."""
         super().__init__()
         self._model = model if isinstance(model, TangleModel) else load_tangle_model(model)
+        self._rule = check_rule(rule)
+        check_serves(self._rule, self._model.objective, self._model.source)
         if warm_up > 0:
             self._model.warm_up(warm_up)
         self._intrinsics = intrinsics
-        self._rule = check_rule(rule)
         self._seed = seed
         depth = self.DeclareAbstractInputPort(
             "depth_image", AbstractValue.Make(ImageDepth32F(intrinsics.width, intrinsics.height)))

@@ -43,6 +43,7 @@ from tangle_drake.tangle_cnn.checkpoint import (
 from tangle_drake.tangle_cnn.metrics import binary_metrics, few_samples_warning
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION, Normalisation
+from tangle_drake.tangle_cnn.objectives import objective_named
 from tangle_drake.tangle_cnn.train_settings import AUGMENTATIONS, TrainSettings
 from tangle_drake.tangle_cnn.training_data import TrainingData, load_training_data
 
@@ -81,8 +82,10 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
     """
     out = Path(out)
     dev = resolve_device(device)
+    objective = objective_named(settings.objective)
     data = load_training_data(data_dir, normalisation, settings.validation_fraction,
-                              settings.seed, target_mask=settings.target_mask)
+                              settings.seed, target_mask=settings.target_mask,
+                              objective=objective)
     normalisation = data.normalisation
     config = network or NetworkConfig(input_size=data.crop.size_px,
                                       input_channels=normalisation.channels)
@@ -106,7 +109,8 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
         net.load_state_dict(state["weights"])
         optimiser.load_state_dict(state["optimiser"])
         log(f"resuming {out} after epoch {state['epoch']}")
-    log(f"data: {data.summary['samples']} samples ({data.summary['tangled']} tangled) in "
+    log(f"data: {data.summary['samples']} samples ({data.summary['tangled']} "
+        f"{objective.classes[1]}) in "
         f"{data.summary['piles']} piles; training on {len(data.train)} x "
         f"{AUGMENTATIONS[settings.augment]} (augment {settings.augment}), validating on "
         f"{len(data.validation)}; device {dev}")
@@ -218,7 +222,7 @@ def _save(out: Path, state: dict, data: TrainingData, settings: TrainSettings,
     best = state["history"][state["best_epoch"] - 1]
     checkpoint = model_checkpoint(
         config, data.crop, normalisation, state["best_weights"], gripper=data.gripper,
-        part=data.part, data=data.summary,
+        part=data.part, data=data.summary, objective=settings.objective,
         training={**asdict(settings), "device": str(dev), "torch": str(torch.__version__)},
         metrics={**best, "epochs_run": state["epoch"], "stop_reason": state["stop_reason"]})
     save_atomic(checkpoint, out)

@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.tangle_cnn.objectives import DEFAULT_OBJECTIVE, objective_named
 
 AUGMENTATIONS: dict[str, int] = {"d4": 8, "none": 1}
 """Augmentation name -> number of transforms (transform ids 0..n-1)."""
@@ -29,6 +30,9 @@ class TrainSettings:
     target_mask: bool = True
     """Give the network a second channel marking the target part's pixels
     (:mod:`.target_mask`); ``False`` trains on the paper's plain depth crop."""
+    objective: str = DEFAULT_OBJECTIVE
+    """What the model learns to predict (:mod:`.objectives`): ``tangled``, the paper's tangle
+    CNN, or ``success``, the seed's success/failure baseline (from physical picks)."""
 
     def __post_init__(self) -> None:
         if self.augment not in AUGMENTATIONS:
@@ -40,3 +44,4 @@ class TrainSettings:
             raise TangleDrakeError(f"the learning rate must be positive, got {self.lr}")
         if not 0 < self.validation_fraction < 1:
             raise TangleDrakeError("the validation fraction must be between 0 and 1")
+        objective_named(self.objective)

@@ -16,10 +16,11 @@ import numpy as np
 import torch
 
 from tangle_drake.crops import CropSpec
-from tangle_drake.dataset import load_samples, read_manifest
+from tangle_drake.dataset import load_samples, read_manifest, stored_fields
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.tangle_cnn.normalise import Normalisation
+from tangle_drake.tangle_cnn.objectives import TANGLED, Objective
 from tangle_drake.tangle_cnn.split import split_by_pile, undersample
 from tangle_drake.tangle_cnn.target_mask import TargetMask
 
@@ -33,7 +34,7 @@ class TrainingData:
     inputs: torch.Tensor
     """(N, C, S, S) network inputs (``Normalisation.inputs``), float32, on the CPU."""
     labels: np.ndarray
-    """(N,) int64, 1 = tangled."""
+    """(N,) int64, the objective's classes: 1 = tangled (or failure), 0 = the good outcome."""
     train: np.ndarray
     """Indices of the training part (whole piles, classes balanced)."""
     validation: np.ndarray
@@ -48,18 +49,29 @@ class TrainingData:
     """Path, content fingerprint, counts and the manifest: stored in the checkpoint."""
 
 
-def load_checked_samples(directory: Path, extra_fields: tuple[str, ...] = ()
+def load_checked_samples(directory: Path, extra_fields: tuple[str, ...] = (),
+                         objective: Objective = TANGLED
                          ) -> tuple[dict[str, np.ndarray], CropSpec, dict]:
-    """The ``FIELDS`` (and ``extra_fields``) of every labelled sample as stored
-    (``fingerprint`` hashes them so), the crop spec and the manifest; ``TangleDrakeError``
-    naming ``directory`` if there are no samples or they are unusable. Samples without a
-    tangle label (``label`` -1: a pick log's empty grasps) are left out."""
+    """The ``FIELDS`` (and ``extra_fields``) of every sample labelled for ``objective``, with
+    ``label`` its class (0 the good outcome; ``fingerprint`` hashes them so), the crop spec
+    and the manifest; ``TangleDrakeError`` naming ``directory`` if there are no such samples
+    or they are unusable. Samples without a label for the objective (a tangle ``label`` of -1:
+    a pick's empty grasp; an ``outcome`` of -1: not sure) are left out."""
     directory = Path(directory)
     manifest = read_manifest(directory)
-    samples = load_samples(directory, (*FIELDS, *extra_fields))
-    labelled = samples["label"] != -1
-    if not labelled.all():
-        samples = {name: array[labelled] for name, array in samples.items()}
+    stored = stored_fields(directory)
+    if stored and objective.field not in stored:
+        raise TangleDrakeError(f"dataset {directory} has no {objective.field!r} field: a "
+                               f"{objective.name} model learns from {objective.data}")
+    samples = load_samples(directory, tuple(dict.fromkeys((*FIELDS, objective.field,
+                                                           *extra_fields))))
+    raw = samples[objective.field]
+    if not np.isin(raw, [*objective.codes, -1]).all():
+        raise TangleDrakeError(f"dataset {directory}: {objective.field} values must be one of "
+                               f"{sorted(objective.codes)} (-1: none)")
+    classes, labelled = objective.labels(raw)
+    samples = {name: array[labelled] for name, array in samples.items()}
+    samples["label"] = classes.astype(samples["label"].dtype)
     crops, labels = samples["crop"], samples["label"].astype(np.int64)
     depths = samples["depth_m"]
     if len(labels) == 0:
@@ -69,8 +81,6 @@ def load_checked_samples(directory: Path, extra_fields: tuple[str, ...] = ()
         raise TangleDrakeError(f"dataset {directory}: crops have shape {crops.shape[1:]}, "
                                "not square")
     crop = _crop_spec(manifest, crops.shape[1], directory)
-    if not np.isin(labels, (0, 1)).all():
-        raise TangleDrakeError(f"dataset {directory}: labels must be 0 or 1 (-1: none)")
     if not (np.isfinite(crops).all() and np.isfinite(depths).all() and (depths > 0).all()):
         raise TangleDrakeError(f"dataset {directory}: crops and depths must be finite, "
                                "depths positive")
@@ -79,17 +89,18 @@ def load_checked_samples(directory: Path, extra_fields: tuple[str, ...] = ()
 
 def load_training_data(directory: Path, normalisation: Normalisation,
                        validation_fraction: float, seed: int,
-                       target_mask: bool = False) -> TrainingData:
-    """Load ``directory``, split it by pile with ``seed`` and undersample each part's classes;
-    ``target_mask`` alone decides whether the inputs get the target-mask channel (fitted to
-    the data's hand and crop), whatever mask ``normalisation`` held."""
+                       target_mask: bool = False, objective: Objective = TANGLED) -> TrainingData:
+    """Load ``directory``'s labels for ``objective``, split it by pile with ``seed`` and
+    undersample each part's classes; ``target_mask`` alone decides whether the inputs get the
+    target-mask channel (fitted to the data's hand and crop), whatever mask ``normalisation``
+    held."""
     directory = Path(directory)
-    samples, crop, manifest = load_checked_samples(directory)
+    samples, crop, manifest = load_checked_samples(directory, objective=objective)
     crops, labels = samples["crop"], samples["label"].astype(np.int64)
     depths, piles = samples["depth_m"], samples["pile_seed"]
     counts = np.bincount(labels, minlength=2)
     if counts.min() == 0:
-        only = "tangled" if counts[1] else "not tangled"
+        only = objective.classes[1] if counts[1] else objective.classes[0]
         raise TangleDrakeError(f"dataset {directory} holds only {only} samples; the CNN needs "
                                "both classes")
     try:
@@ -111,7 +122,10 @@ def load_training_data(directory: Path, normalisation: Normalisation,
         "fingerprint": fingerprint(samples),
         "samples": len(labels),
         "tangled": int(counts[1]),
+        "objective": objective.name,
+        "class_counts": {name: int(n) for name, n in zip(objective.classes, counts, strict=True)},
         "piles": len(np.unique(piles)),
+        "pile_seeds": [int(seed) for seed in np.unique(piles)],
         "train_samples": len(train),
         "train_piles": len(np.unique(piles[train])),
         "validation_samples": len(validation),

@@ -1,0 +1,89 @@
+"""What a model learns to predict (its objective), the one place for it: which dataset field its
+labels come from, what its two classes are, and which selection rules its probability serves.
+
+The network is the same for every objective; class 0 is always the good outcome, so a model's
+prediction is P(class 0): P(not tangled) for the paper's tangle CNN (labels from ``label``, the
+auto-lift's or a pick's), P(success) for the seed's success/failure baseline (Matsumura et al.
+2018; labels from ``outcome``, the physical pick's: success is exactly one part, failure
+several or none). A checkpoint names its objective; one made before objectives existed is a
+tangle CNN. Torch-free.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tangle_drake.errors import TangleDrakeError
+
+
+@dataclass(frozen=True)
+class Objective:
+    name: str
+    classes: tuple[str, str]
+    """Class 0 (the good outcome, whose probability the model gives) and class 1."""
+    field: str
+    """The dataset field the labels come from."""
+    codes: dict[int, int]
+    """Field value -> class; other values (-1: no label) are left out."""
+    data: str
+    """How to make data with this field, for error messages."""
+
+    @property
+    def probability(self) -> str:
+        """The words for what the model predicts, e.g. ``P(not tangled)``."""
+        return f"P({self.classes[0]})"
+
+    def labels(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The class of each labelled row of ``values`` (the field), and which rows those are."""
+        values = np.asarray(values).astype(np.int64)
+        labelled = np.isin(values, list(self.codes))
+        lookup = np.vectorize(self.codes.__getitem__, otypes=[np.int64])
+        return (lookup(values[labelled]) if labelled.any() else
+                np.zeros(0, dtype=np.int64)), labelled
+
+
+TANGLED = Objective("tangled", ("not tangled", "tangled"), "label", {0: 0, 1: 1},
+                    "`tangle-drake collect` (either --label)")
+SUCCESS = Objective("success", ("success", "failure"), "outcome", {1: 0, 2: 1, 0: 1},
+                    "`tangle-drake collect --label pick` (or a pick log)")
+OBJECTIVES = {o.name: o for o in (TANGLED, SUCCESS)}
+DEFAULT_OBJECTIVE = TANGLED.name
+
+RULE_OBJECTIVES = {"cnn": TANGLED, "harmonic": TANGLED, "emap-harmonic": TANGLED,
+                   "success-cnn": SUCCESS}
+"""The model each rule that needs one reads."""
+DEFAULT_RULES = {TANGLED.name: "harmonic", SUCCESS.name: "success-cnn"}
+"""The rule a model of each objective picks with unless told otherwise."""
+
+
+def rule_objective(rule: str) -> Objective:
+    """The objective of the model ``rule`` reads (a tangle CNN for rules that read none)."""
+    return RULE_OBJECTIVES.get(rule, TANGLED)
+
+
+def objective_named(name: str) -> Objective:
+    if name not in OBJECTIVES:
+        raise TangleDrakeError(f"unknown objective {name!r}; choose one of "
+                               f"{', '.join(OBJECTIVES)}")
+    return OBJECTIVES[name]
+
+
+def checkpoint_objective(info: dict[str, Any]) -> Objective:
+    """The objective of a checkpoint's metadata (a tangle CNN if it names none)."""
+    return objective_named(str(info.get("objective") or DEFAULT_OBJECTIVE))
+
+
+def check_serves(rule: str, objective: Objective, model: object) -> None:
+    """Refuse a ``model`` (named in the message) of ``objective`` for a ``rule`` it cannot
+    serve."""
+    needed = RULE_OBJECTIVES.get(rule)
+    if needed is None or needed == objective:
+        return
+    fitting = [r for r, o in RULE_OBJECTIVES.items() if o == objective]
+    raise TangleDrakeError(
+        f"the {rule} rule needs a model of {needed.probability} (trained with --objective "
+        f"{needed.name}); {model} predicts {objective.probability} (--objective "
+        f"{objective.name}): use it with the {' or '.join(fitting)} rule")

@@ -1,0 +1,108 @@
+"""The seed's second baseline: a success/failure CNN learns P(success) from physical picks'
+outcomes, names its objective, ranks with ``success-cnn``, and is refused, with a clear error,
+by the rules that read P(not tangled) (and a tangle CNN by ``success-cnn``)."""
+
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+import pytest
+from cli_run import run_command
+
+from tangle_drake.bench.methods import parse_method
+from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.pick.selection import resolve_tangle_choice
+from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
+from tangle_drake.tangle_cnn.evaluate import evaluate_model
+from tangle_drake.tangle_cnn.model import load_tangle_model
+from tangle_drake.tangle_cnn.objectives import SUCCESS
+from tangle_drake.tangle_cnn.synthetic import (
+    GRASP_DEPTH_M,
+    synthetic_crop,
+    write_synthetic_dataset,
+)
+from tangle_drake.tangle_cnn.system import TangleCnnSystem
+from tangle_drake.tangle_cnn.train import TrainSettings, train
+from tangle_drake.tangle_cnn.training_data import load_checked_samples
+
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
+INTRINSICS = CameraIntrinsics(64, 48, 50.0, 50.0, 32.0, 24.0)
+run_train = partial(run_command, "train")
+
+
+@pytest.fixture(scope="module")
+def picks(tmp_path_factory) -> Path:
+    directory = tmp_path_factory.mktemp("picks")
+    write_synthetic_dataset(directory, 192, seed=3, outcomes=True)
+    return directory
+
+
+@pytest.fixture(scope="module")
+def lifts(tmp_path_factory) -> Path:
+    directory = tmp_path_factory.mktemp("lifts")
+    write_synthetic_dataset(directory, 64, seed=4)
+    return directory
+
+
+@pytest.fixture(scope="module")
+def models(picks, lifts, tmp_path_factory) -> dict[str, Path]:
+    out = tmp_path_factory.mktemp("models")
+    paths = {"success": out / "bars.success.pt", "tangled": out / "bars.pt"}
+    train(picks, paths["success"], TrainSettings(epochs=3, seed=2, objective="success"),
+          device="cpu", log=lambda line: None)
+    train(lifts, paths["tangled"], TrainSettings(epochs=1, seed=2), device="cpu",
+          log=lambda line: None)
+    return paths
+
+
+def test_labels_come_from_the_outcome_with_empty_grasps_as_failures(picks):
+    samples, _, _ = load_checked_samples(picks, objective=SUCCESS)
+    outcome = samples["outcome"]
+    assert set(np.unique(outcome)) == {0, 1, 2}  # the empty grasps are kept
+    assert (samples["label"] == (outcome != 1)).all()  # failure: several or none
+    tangle_labelled, _, _ = load_checked_samples(picks)
+    assert len(tangle_labelled["label"]) < len(outcome)  # the tangle CNN drops the empties
+
+
+def test_the_success_cnn_learns_p_success_and_says_so(models):
+    model = load_tangle_model(models["success"])
+    assert model.objective is SUCCESS
+    assert read_checkpoint(models["success"])["objective"] == "success"
+    rng = np.random.default_rng(7)
+    crossing = np.arange(60) % 2 == 1  # several or none came up
+    crops = np.stack([synthetic_crop(bool(c), 32, rng) for c in crossing])
+    p_success = model.predict(crops, np.full(60, GRASP_DEPTH_M))
+    assert ((p_success > 0.5) == ~crossing).mean() > 0.9
+
+
+def test_evaluation_breaks_a_success_model_down_by_outcome(models, picks):
+    result = evaluate_model(load_tangle_model(models["success"]), picks)
+    assert result.objective == "success" and result.classes == ("success", "failure")
+    by_name = {group.name.split(":")[1].strip(): group for group in result.groups}
+    assert set(by_name) == {"several parts came up", "no part came up",
+                            "exactly one part came up"}
+    assert sum(group.samples for group in result.groups) == result.samples
+    assert result.accuracy > 0.8
+
+
+def test_each_model_serves_its_rules_and_is_refused_by_the_others(models):
+    success, tangled = models["success"], models["tangled"]
+    TangleCnnSystem(success, INTRINSICS, "success-cnn", warm_up=0)
+    TangleCnnSystem(tangled, INTRINSICS, "harmonic", warm_up=0)
+    for rule in ("harmonic", "cnn"):
+        with pytest.raises(TangleDrakeError, match=rf"the {rule} rule needs a model of "
+                                                   r"P\(not tangled\).*success-cnn rule"):
+            TangleCnnSystem(success, INTRINSICS, rule, warm_up=0)
+    with pytest.raises(TangleDrakeError, match=r"needs a model of P\(success\)"):
+        TangleCnnSystem(tangled, INTRINSICS, "success-cnn", warm_up=0)
+    # A checkpoint given by path picks with the rule of its objective.
+    assert parse_method(f"model:{success}").rule == "success-cnn"
+    assert parse_method(f"model:{tangled}").rule == "harmonic"
+    assert resolve_tangle_choice("u_hook", model=success).rule == "success-cnn"
+
+
+def test_a_success_cnn_needs_outcomes_in_its_data(lifts, tmp_path):
+    with pytest.raises(TangleDrakeError, match=r"no .outcome. field.*collect --label pick"):
+        run_train("--data", str(lifts), "--out", str(tmp_path / "m.pt"), "--objective",
+                  "success", "--epochs", "1")
