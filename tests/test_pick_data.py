@@ -13,6 +13,7 @@ from cli_run import run_command
 from tangle_drake.bench.methods import MethodRun, MethodSelector
 from tangle_drake.dataset import finished_tasks, load_samples, read_manifest
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.tangle_data.ceiling import pick_ceiling
 from tangle_drake.tangle_data.collect import collect_picks
 from tangle_drake.tangle_data.physical import PhysicalPickSimulator, PickDataSettings
 
@@ -115,3 +116,19 @@ def test_a_scenario_without_a_gripper_to_pick_with_is_refused(tmp_path):
     with pytest.raises(TangleDrakeError, match="picks"):
         collect_picks(SETTINGS, tmp_path / "d", 1, workers=1, scenario_text=text,
                       show_progress=False)
+
+
+def test_the_ceiling_is_graspabilitys_first_reachable_pick_against_the_best_of_each_pile():
+    # Pile 0: rank 0 several, rank 2 one. Pile 1: rank 0 unreachable (absent), rank 1 one.
+    # Pile 2: nothing but empty grasps.
+    samples = {"task": np.array([0, 0, 0, 1, 1, 2, 2]),
+               "rank": np.array([2, 0, 1, 1, 2, 0, 1]),
+               "outcome": np.array([1, 2, 0, 1, 0, 0, 0])}
+    ceiling = pick_ceiling(samples)
+    assert ceiling.piles == 3
+    assert ceiling.graspability == pytest.approx(1 / 3)  # only pile 1's first reachable pick
+    assert ceiling.oracle == pytest.approx(2 / 3)
+    assert ceiling.gap == pytest.approx(1 / 3)
+    assert ceiling.by_rank == {0: (0.0, 2), 1: (pytest.approx(1 / 3), 3), 2: (0.5, 2)}
+    with pytest.raises(ValueError, match="no physical picks"):
+        pick_ceiling({name: np.zeros(0) for name in samples})

@@ -106,3 +106,31 @@ def test_a_success_cnn_needs_outcomes_in_its_data(lifts, tmp_path):
     with pytest.raises(TangleDrakeError, match=r"no .outcome. field.*collect --label pick"):
         run_train("--data", str(lifts), "--out", str(tmp_path / "m.pt"), "--objective",
                   "success", "--epochs", "1")
+
+
+def test_bench_warns_when_a_model_was_trained_on_the_piles_it_tests(tmp_path):
+    from tangle_drake.bench.runner import BenchOptions, plan
+    from tangle_drake.bench.trials import pile_seed
+    from tangle_drake.dataset import write_manifest, write_shard
+    from tangle_drake.tangle_cnn.synthetic import synthetic_samples
+
+    data = tmp_path / "data"
+    data.mkdir()
+    samples = synthetic_samples(48, 32, seed=5)
+    samples["pile_seed"][:8] = pile_seed(0, "u_hook", 1)  # one pile is the bench's trial 1
+    for task in np.unique(samples["task"]):
+        rows = samples["task"] == task
+        write_shard(data, int(task), {name: array[rows] for name, array in samples.items()})
+    write_manifest(data, {"part": "u_hook", "crop": {"size_m": 0.05, "size_px": 32}})
+    model = tmp_path / "u_hook.pt"
+    train(data, model, TrainSettings(epochs=1), device="cpu", log=lambda line: None)
+
+    def notices(trials: int) -> list[str]:
+        _, _, found = plan(BenchOptions(methods=[f"model:{model}"], parts=["u_hook"],
+                                        trials=trials))
+        return [n for n in found if "was trained on" in n]
+
+    assert notices(1) == []  # trial 0's pile is not among its training piles
+    assert notices(3) == [f"warning: {model} was trained on 1 of the 3 u_hook piles this run "
+                          f"tests model:{model} on: its figures there are not a test; collect "
+                          "its data with another --seed"]
