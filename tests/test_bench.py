@@ -325,7 +325,8 @@ def test_the_mode_chooses_the_scenario_and_a_scenario_its_mode(options, mode, sc
 def test_a_cnn_method_without_a_model_is_an_error_or_left_out_of_the_defaults(
         tmp_path, monkeypatch):
     monkeypatch.setattr("tangle_drake.pick.selection.TRAINED_DIR", tmp_path)
-    with pytest.raises(TangleDrakeError, match=r"'harmonic' needs a tangle model.*u_hook\.pt"):
+    with pytest.raises(TangleDrakeError,
+                       match=r"'harmonic' needs a model of P\(not tangled\).*u_hook\.pt"):
         plan(replace(QUICK, methods=["graspability", "harmonic"]))
     config, trials, notices = plan(BenchOptions(parts=["u_hook"]))
     assert [m.name for m in config.methods["u_hook"]] == ["random", "graspability"]

@@ -153,9 +153,10 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
                 f"one (data from {objective.data}, then `tangle-drake train --objective "
                 f"{objective.name}`) and install it there, or pass model:PATH")
         if missing:
+            paths = dict.fromkeys(str(m.model_for(spec.name)) for m in missing)
             notices.append(f"notice: no trained model for part {spec.name!r} "
-                           f"({', '.join(str(m.model_for(spec.name)) for m in missing)}): "
-                           f"methods {', '.join(m.name for m in missing)} skipped on it")
+                           f"({', '.join(paths)}): methods "
+                           f"{', '.join(m.name for m in missing)} skipped on it")
         per_part[spec.name] = tuple(m for m in methods if m not in missing)
         notices += [note for m in per_part[spec.name] if m.model is not None
                     and (note := model_part_notice(m.model, spec.name))]
