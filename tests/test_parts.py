@@ -218,28 +218,44 @@ def test_mesh_with_a_hole_is_capped_with_a_warning(tmp_path, caplog, monkeypatch
     _load_in_drake(part, caplog)
 
 
-def test_mesh_that_stays_open_falls_back_to_its_hull(tmp_path, caplog, monkeypatch):
+def _with_a_fin(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    """``mesh`` with an extra face on one edge: three faces share it, no repair closes it."""
+    a, b = mesh.faces[0][:2]
+    return trimesh.Trimesh(np.vstack([mesh.vertices, mesh.vertices[a] + [0.0, 0.0, 1.0]]),
+                           np.vstack([mesh.faces, [[a, b, len(mesh.vertices)]]]), process=False)
+
+
+def test_mesh_that_stays_open_weighs_a_voxel_fill(tmp_path, caplog, monkeypatch):
     monkeypatch.setattr(library, "_WARNED", set())
-    box = trimesh.creation.box(extents=(40.0, 20.0, 10.0))
-    fin = trimesh.Trimesh(  # an extra face on one edge: three faces share it, no repair helps
-        np.vstack([box.vertices, [[0.0, 0.0, 0.0]]]),
-        np.vstack([box.faces, [[0, 1, 8]]]),
-    )
     path = tmp_path / "finned.ply"
-    fin.export(path)
+    _with_a_fin(trimesh.creation.box(extents=(40.0, 20.0, 10.0))).export(path)
     with caplog.at_level(logging.WARNING, logger="tangle_drake"):
         part = load_part(path, mesh_scale=0.001)
-    assert "convex hull" in caplog.text
-    assert part.mass == pytest.approx(STEEL * 40e-3 * 20e-3 * 10e-3, rel=1e-6)
+    assert "voxel fill" in caplog.text
+    assert part.mass == pytest.approx(STEEL * 40e-3 * 20e-3 * 10e-3, rel=0.02)
     _load_in_drake(part, caplog)
     caplog.clear()
     with caplog.at_level(logging.WARNING, logger="tangle_drake"):
         load_part(path, mesh_scale=0.001)  # again in this process: said once is enough
-    assert "convex hull" not in caplog.text
+    assert "voxel fill" not in caplog.text
     monkeypatch.setattr(library, "_WARNED", set())  # as in a new process
     with caplog.at_level(logging.WARNING, logger="tangle_drake"):
         load_part(path, mesh_scale=0.001)  # from the cache: still warned
-    assert "convex hull" in caplog.text
+    assert "voxel fill" in caplog.text
+
+
+def test_an_open_bent_wire_weighs_about_its_wire_not_its_hull(tmp_path, monkeypatch):
+    monkeypatch.setattr(library, "_WARNED", set())
+    tube = _u_tube_mm()
+    path = tmp_path / "open_hook.stl"
+    _with_a_fin(tube).export(path)
+    part = load_part(path, mesh_scale=0.001)
+    wire_mass = load_part("u_hook").mass
+    hull_mass = STEEL * tube.convex_hull.volume * 1e-9
+    assert hull_mass > 3 * wire_mass  # what the hull would have said
+    assert part.mass == pytest.approx(wire_mass, rel=0.02)
+    reference = load_part("u_hook").inertia
+    assert np.allclose(part.inertia, reference, rtol=0.05, atol=0.05 * np.abs(reference).max())
 
 
 @pytest.mark.parametrize("suffix", [".obj", ".stl", ".ply"])

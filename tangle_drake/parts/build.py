@@ -13,7 +13,7 @@ import numpy as np
 import trimesh
 
 from tangle_drake.parts import wire
-from tangle_drake.parts.mass import MassProperties, mass_properties
+from tangle_drake.parts.mass import MassProperties, mass_properties, voxel_mass_properties
 from tangle_drake.parts.obj_file import write_obj
 from tangle_drake.parts.sdf import BODY_NAME, write_part_sdf
 
@@ -22,10 +22,14 @@ VISUAL_FILE = "visual.obj"
 # Added to the bounding radius so it still encloses the vertices as rounded in the OBJ files.
 _ROUNDING_MARGIN = 1e-6
 
-# Where a part's mass properties came from: its closed surface, or (for a mesh that stays
-# open after repair) its convex hull, the largest solid that surface could bound.
+# Where a part's mass properties came from: its closed surface; for a mesh that is no clean
+# volume after repair (edges shared by three faces, say), a voxel fill of the solid it bounds;
+# if even that finds no inside, its convex collision pieces (CoACD's exceed a bent wire's
+# volume by up to a third). Never the mesh's convex hull, which weighs a bent wire several
+# times its mass, and the closed loop weighs what it lifts.
 MASS_FROM_MESH = "mesh"
-MASS_FROM_HULL = "convex_hull"
+MASS_FROM_VOXELS = "voxel_fill"
+MASS_FROM_PIECES = "convex_pieces"
 
 
 def _meta(
@@ -85,9 +89,16 @@ def build_mesh_part(
     density: float,
     holes_capped: int,
 ) -> dict[str, Any]:
-    """Convex-piece collisions, the mesh itself as visual; mass from the mesh, or its hull."""
-    mass_from = MASS_FROM_MESH if mesh.is_volume else MASS_FROM_HULL
-    props = mass_properties(mesh if mesh.is_volume else mesh.convex_hull, density)
+    """Convex-piece collisions, the mesh itself as visual; mass from the mesh (see
+    ``MASS_FROM_MESH`` for one that is no clean volume)."""
+    mass_from, props = MASS_FROM_MESH, None
+    if mesh.is_volume:
+        props = mass_properties(mesh, density)
+    elif (props := voxel_mass_properties(mesh, density)) is not None:
+        mass_from = MASS_FROM_VOXELS
+    else:
+        mass_from = MASS_FROM_PIECES
+        props = mass_properties(trimesh.util.concatenate(pieces), density)
     shift = -props.com
     mesh = mesh.copy()
     mesh.apply_translation(shift)

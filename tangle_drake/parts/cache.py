@@ -22,7 +22,7 @@ from typing import Any
 from tangle_drake.paths import cache_dir
 
 # Bump whenever generated files or their metadata change meaning: old entries are then ignored.
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 META_FILE = "meta.json"
 _STALE_TEMP_SECONDS = 3600.0
 

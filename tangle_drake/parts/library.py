@@ -55,8 +55,10 @@ def load_part(
     Meshes that are not watertight are repaired: normals fixed, then each hole closed with a
     flat triangle fan (exact for holes that are flat, like a missing end face). One that is
     still not watertight (edges shared by three faces, say) has no volume to integrate: its
-    mass properties then come from its convex hull at `density`, an upper bound (exact for a
-    convex part, too heavy by the volume of its concavities otherwise). Either repair logs
+    mass properties then come from a voxel fill of the solid it bounds at `density` (within
+    about 2 %), or, if that finds no inside, from its convex collision pieces (up
+    to a third too heavy for a bent wire); never from its convex hull, which would weigh a
+    bent wire several times its mass. Either repair logs
     a warning, once per process; CoACD may also take much longer (up to minutes) on such a mesh.
     """
     scale = _positive("mesh_scale", mesh_scale)
@@ -159,13 +161,17 @@ def _warn_about_repairs(path: Path, meta: dict[str, Any]) -> None:
             meta["holes_capped"],
             meta["mass"],
         )
-    if meta["mass_from"] == build.MASS_FROM_HULL:
+    approximation = {build.MASS_FROM_VOXELS: "a voxel fill of the solid it bounds (within "
+                                             "about 2 %)",
+                     build.MASS_FROM_PIECES: "its convex collision pieces (which can be up to "
+                                             "a third too heavy for a thin part)"}
+    if meta["mass_from"] in approximation:
         log.warning(
             "mesh file %s is not watertight even after repair (holes filled, normals fixed): "
-            "its mass (%.4g kg) and inertia come from its convex hull, which overestimates "
-            "them by the volume of any concavities; give a closed mesh for exact values",
+            "its mass (%.4g kg) and inertia come from %s; give a closed mesh for exact values",
             path,
             meta["mass"],
+            approximation[meta["mass_from"]],
         )
 
 
