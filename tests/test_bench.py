@@ -334,6 +334,23 @@ def test_a_cnn_method_without_a_model_is_an_error_or_left_out_of_the_defaults(
     assert len(notices) == 1 and "cnn, harmonic" in notices[0] and "u_hook.pt" in notices[0]
 
 
+def test_perturbed_physics_is_one_draw_per_pile_and_part_of_the_runs_identity():
+    from dataclasses import asdict
+
+    from tangle_drake.bench.runner import identity
+    from tangle_drake.bench.trials import trial_physics
+    from tangle_drake.tangle_data.perturb import PhysicsSpread
+
+    config, _, _ = plan(replace(QUICK, perturb=True))
+    assert identity(config)["physics"] == asdict(PhysicsSpread())
+    first = trial_physics(config, "u_hook", 0)
+    assert first == trial_physics(config, "u_hook", 0) != trial_physics(config, "u_hook", 1)
+    plain, _, _ = plan(QUICK)
+    assert trial_physics(plain, "u_hook", 0) is None and "physics" not in identity(plain)
+    with pytest.raises(TangleDrakeError, match="--perturb"):
+        plan(replace(QUICK, clear=True, perturb=True))
+
+
 def test_out_must_be_a_directory(tmp_path, capsys):
     out = tmp_path / "a_file"
     out.write_text("")

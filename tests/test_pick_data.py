@@ -2,6 +2,7 @@
 gripper from the same pile, labelled by the simulation's count, resumable to exactly the
 uninterrupted dataset; a forced candidate is that one alone; bad options are clear errors."""
 
+import json
 from functools import partial
 from pathlib import Path
 from types import SimpleNamespace
@@ -13,8 +14,10 @@ from cli_run import run_command
 from tangle_drake.bench.methods import MethodRun, MethodSelector
 from tangle_drake.dataset import finished_tasks, load_samples, read_manifest
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.graspability import GraspCandidate
 from tangle_drake.tangle_data.ceiling import pick_ceiling
 from tangle_drake.tangle_data.collect import collect_picks
+from tangle_drake.tangle_data.perturb import ContactScaler, PhysicsSpread, PickPhysics, offset_pose
 from tangle_drake.tangle_data.physical import PhysicalPickSimulator, PickDataSettings
 
 SETTINGS = PickDataSettings(part="c_ring", parts_per_pile=4, top_k=2)
@@ -132,3 +135,65 @@ def test_the_ceiling_is_graspabilitys_first_reachable_pick_against_the_best_of_e
     assert ceiling.by_rank == {0: (0.0, 2), 1: (pytest.approx(1 / 3), 3), 2: (0.5, 2)}
     with pytest.raises(ValueError, match="no physical picks"):
         pick_ceiling({name: np.zeros(0) for name in samples})
+
+
+def test_a_pick_draws_its_physics_from_the_seed_within_the_spread(uninterrupted):
+    spread = PhysicsSpread()
+    draws = [PickPhysics.draw(spread, np.random.default_rng(seed)) for seed in range(200)]
+    assert PickPhysics.draw(spread, np.random.default_rng(3)) == draws[3]
+    friction = np.array([d.friction for d in draws])
+    stiffness = np.array([d.pad_stiffness for d in draws])
+    offsets = np.array([d.offset for d in draws])
+    assert (abs(friction - 1) <= spread.friction).all() and friction.std() > 0.05
+    assert (stiffness >= 1 / (1 + spread.pad_stiffness) - 1e-12).all()
+    assert (stiffness <= 1 + spread.pad_stiffness + 1e-12).all()
+    assert offsets[:, :2].std() == pytest.approx(spread.position_m, rel=0.2)
+    assert offsets[:, 2].std() == pytest.approx(spread.angle_deg, rel=0.2)
+    assert PickPhysics.draw(PhysicsSpread(0, 0, 0, 0), np.random.default_rng(0)) == \
+        PickPhysics(1.0, 1.0, (0.0, 0.0, 0.0))
+    # The collection records each pick's draw.
+    record = json.loads((uninterrupted / "shard_0000000.json").read_text())
+    assert [p["rank"] for p in record["physics"]] == list(range(record["samples"]))
+
+
+def test_the_grasp_error_moves_the_executed_pose_not_what_the_method_saw():
+    pose = np.eye(4)
+    pose[:3, 3] = (0.3, 0.2, 0.95)
+    moved = offset_pose(pose, (0.002, -0.001, 90.0))
+    assert np.allclose(moved[:3, 3], (0.302, 0.199, 0.95))
+    assert np.allclose(moved[:3, :3], [[0, -1, 0], [1, 0, 0], [0, 0, 1]])
+    assert np.array_equal(offset_pose(pose, (0.0, 0.0, 0.0)), pose)
+    candidate = GraspCandidate(u=10.0, v=20.0, angle_deg=30.0, width_m=0.03, depth_m=0.5,
+                               score=0.9, pose=pose)
+    switch = MethodSelector([])
+    context = switch.CreateDefaultContext()
+    switch.GetInputPort("candidates").FixValue(context, [candidate])
+    switch.GetInputPort("method").FixValue(context, MethodRun("graspability", 0, 0,
+                                                              (0.002, -0.001, 90.0)))
+    (scored,) = switch.GetOutputPort("scored_candidates").Eval(context)
+    assert np.allclose(scored.candidate.pose, moved)
+    assert (scored.candidate.u, scored.candidate.v, scored.candidate.angle_deg) == (10, 20, 30)
+    assert np.allclose(switch.GetOutputPort("selected_grasp").Eval(context).pose, moved)
+
+
+def test_the_contact_scaler_scales_friction_everywhere_and_the_pads_stiffness():
+    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.station import build_station
+
+    station = build_station(resolve_scenario("floating_gripper.yaml"))
+    scaler = ContactScaler(station.plant, station.scene_graph)
+    context = station.CreateDefaultContext()
+    scaler.apply(context, friction=0.8, pad_stiffness=1.5)
+    inspector = station.scene_graph.get_query_output_port().Eval(
+        station.scene_graph.GetMyContextFromRoot(context)).inspector()
+    pads = 0
+    for geometry, model in scaler.original.items():
+        now = inspector.GetProximityProperties(geometry)
+        assert now.GetProperty("material", "coulomb_friction").dynamic_friction() == \
+            pytest.approx(0.8 * model.GetProperty("material", "coulomb_friction")
+                          .dynamic_friction())
+        if model.HasProperty("hydroelastic", "hydroelastic_modulus"):
+            pads += 1
+            assert now.GetProperty("hydroelastic", "hydroelastic_modulus") == pytest.approx(
+                1.5 * model.GetProperty("hydroelastic", "hydroelastic_modulus"))
+    assert pads == 2  # the two finger pads are the only compliant geometries

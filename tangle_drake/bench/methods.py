@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -51,6 +51,7 @@ from tangle_drake.tangle_cnn.selection import (
     needs_model,
     rank_candidates,
 )
+from tangle_drake.tangle_data.perturb import offset_pose
 
 DEFAULT_METHODS = ("random", "graspability", "cnn", "harmonic")
 """The methods a run compares unless told otherwise (every rule is a method, under its own
@@ -109,6 +110,10 @@ class MethodRun(NamedTuple):
     only: int | None = None
     """Try graspability's candidate of this rank and no other (the physical-pick data's
     labels: one pick per candidate); ``None``: the method's order."""
+    offset: tuple[float, float, float] | None = None
+    """An error of the grasp pose the robot executes (x, y in m, a turn about the vertical in
+    degrees; :class:`~tangle_drake.tangle_data.perturb.PickPhysics`): every candidate's
+    ``pose`` is moved by it, what the method saw (``u``, ``v``, ``angle_deg``) is not."""
 
 
 class MethodSelector(LeafSystem):
@@ -137,19 +142,28 @@ class MethodSelector(LeafSystem):
                                        self._calc_selected)
 
     def _calc_scored(self, context: Context, value: AbstractValue) -> None:
-        method = self._method.Eval(context)
-        if method.only is None and method.name in self._cnn:
-            value.set_value(list(self._cnn[method.name][0].Eval(context)))
-        else:
-            value.set_value(self._ranked(context, method))
+        value.set_value(self._scored(context))
 
     def _calc_selected(self, context: Context, value: AbstractValue) -> None:
         method = self._method.Eval(context)
-        if method.only is None and method.name in self._cnn:
+        if method.only is None and method.offset is None and method.name in self._cnn:
             value.set_value(self._cnn[method.name][1].Eval(context))
         else:
-            scored = self._ranked(context, method)
+            scored = self._scored(context)
             value.set_value(scored[0].candidate if scored else None)
+
+    def _scored(self, context: Context) -> list:
+        """The active method's candidates, best first, each moved by the method's offset."""
+        method = self._method.Eval(context)
+        if method.only is None and method.name in self._cnn:
+            scored = list(self._cnn[method.name][0].Eval(context))
+        else:
+            scored = self._ranked(context, method)
+        if method.offset is None:
+            return scored
+        return [s._replace(candidate=replace(s.candidate, pose=offset_pose(
+            s.candidate.pose, method.offset))) if s.candidate.pose is not None else s
+            for s in scored]
 
     def _ranked(self, context: Context, method: MethodRun) -> list:
         """The candidates of a rule that needs no system of its own, or graspability's

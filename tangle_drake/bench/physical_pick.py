@@ -30,6 +30,7 @@ from tangle_drake.pile import PileSettler, SettledPile
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import build_station, camera_model
+from tangle_drake.tangle_data.perturb import ContactScaler, PickPhysics
 
 FLOATING_SIM_LIMIT = 20.0
 """Simulated seconds a floating-gripper pick may take (one takes ~5 s)."""
@@ -76,19 +77,28 @@ class PickRig:
         """The planner's: while the pile is locked, the driver looks at every update."""
         self.methods = {m.name: m for m in methods}
         self.intrinsics: CameraIntrinsics = camera_model(scenario).intrinsics
+        station = self.episode.pick.station
+        self._contacts = ContactScaler(station.plant, station.scene_graph)
 
     def settle(self, seed: int) -> SettledPile:
         """Drop and settle the pile made with ``seed``."""
         return self.settler.settle(seed)
 
-    def pick(self, state: np.ndarray, run: MethodRun) -> PhysicalPick:
-        """Restore the settled plant ``state`` and make one pick as ``run`` says."""
+    def pick(self, state: np.ndarray, run: MethodRun,
+             physics: PickPhysics | None = None) -> PhysicalPick:
+        """Restore the settled plant ``state`` and make one pick as ``run`` says, under the
+        model's physics or, given ``physics``, under that draw (the restored context brings
+        the model's back for the next pick)."""
         episode = self.episode
         diagram, station = episode.pick.diagram, episode.pick.station
         depth = []
         locked = station.pile_bodies
+        if physics is not None:
+            run = run._replace(offset=physics.offset)
 
         def prepare(context: Context) -> None:
+            if physics is not None:
+                self._contacts.apply(context, physics.friction, physics.pad_stiffness)
             diagram.GetInputPort("method").FixValue(context, run)
             depth.append(station.GetOutputPort("camera.depth_image").Eval(
                 station.GetMyContextFromRoot(context)))

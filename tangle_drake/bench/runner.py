@@ -44,6 +44,7 @@ from tangle_drake.pile import check_pile
 from tangle_drake.scenario import parse_scenario
 from tangle_drake.scenario_files import scenario_path
 from tangle_drake.tangle_cnn.objectives import rule_objective
+from tangle_drake.tangle_data.perturb import PhysicsSpread
 from tangle_drake.workers import start_workers
 
 DEFAULT_TRIALS = 50
@@ -80,6 +81,9 @@ class BenchOptions:
     open_loop: bool = False
     gallery: bool = False
     """Write a tile of each failed pick into ``out/gallery`` (:mod:`.gallery`)."""
+    perturb: bool = False
+    """Pick under perturbed physics (:class:`~tangle_drake.tangle_data.perturb.PhysicsSpread`,
+    one draw per pile)."""
     show_progress: bool | None = None
     command: str = "tangle-drake bench"
     """The command line, written into the report."""
@@ -167,8 +171,12 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
             f"{mode} mode: drop --mode, or pass the {MODE_SCENARIOS[options.mode]} scenario")
     if options.gallery and options.clear:
         raise TangleDrakeError("--gallery draws single picks; with --clear, use demo --pictures")
+    if options.perturb and options.clear:
+        raise TangleDrakeError("--perturb perturbs single picks; bin clearing runs the model's "
+                               "physics")
     config = BenchConfig(text, tuple(parts), per_part, mode, options.seed, pile_size,
-                         options.clear, options.open_loop, options.gallery)
+                         options.clear, options.open_loop, options.gallery,
+                         PhysicsSpread() if options.perturb else None)
     if options.clear and not options.open_loop:
         closed_loop_settings(scenario)  # a tray and a wrist sensor, or a clear error now
     notices += overlap_warnings(config, trials)
@@ -218,6 +226,7 @@ def identity(config: BenchConfig) -> dict:
         "graspability": {p.name: asdict(default_graspability_params(part_scenario(config, p)))
                          for p in config.parts},
         **({"clear": {"open_loop": config.open_loop}} if config.clear else {}),
+        **({"physics": asdict(config.physics)} if config.physics is not None else {}),
     }
 
 

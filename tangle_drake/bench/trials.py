@@ -27,6 +27,7 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.pick.outcome import Outcome, PickRecord
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
+from tangle_drake.tangle_data.perturb import PhysicsSpread, PickPhysics
 
 MODE_SCENARIOS = {"floating": "floating_gripper.yaml", "arm": "pick_demo.yaml"}
 """The shipped scenario of each ``--mode``: the gripper on the gantry, or on the Nextage."""
@@ -38,7 +39,7 @@ FAILURES = tuple(kind.value for kind in FailureKind)
 the robot could reach or reach without a collision, ..., or the pick did not finish within the
 simulated time allowed."""
 
-_PILE, _RANDOM = 0, 1
+_PILE, _RANDOM, _PHYSICS = 0, 1, 2
 
 
 @dataclass(frozen=True)
@@ -70,6 +71,8 @@ class BenchConfig:
     """With ``clear``: the paper's open loop instead of the closed one."""
     gallery: bool = False
     """Draw a tile of each failed pick (:mod:`.gallery`); not part of the run's identity."""
+    physics: PhysicsSpread | None = None
+    """Pick under perturbed physics, one draw per pile for every method (``--perturb``)."""
 
 
 def scenario_mode(scenario: Scenario, source: str) -> str:
@@ -93,6 +96,14 @@ def pile_seed(seed: int, part: str, trial: int) -> int:
 def method_seed(seed: int, part: str, trial: int) -> int:
     """The seed of the trial's random choices (the ``random`` method's draw)."""
     return int(_stream(seed, part, trial, _RANDOM).generate_state(1, np.uint32)[0])
+
+
+def trial_physics(config: BenchConfig, part: str, trial: int) -> PickPhysics | None:
+    """The physics of trial ``trial`` of ``part`` under ``--perturb`` (else ``None``)."""
+    if config.physics is None:
+        return None
+    rng = np.random.default_rng(_stream(config.seed, part, trial, _PHYSICS))
+    return PickPhysics.draw(config.physics, rng)
 
 
 def part_scenario(config: BenchConfig, spec: PartSpec) -> Scenario:
@@ -141,9 +152,11 @@ class TrialWorker:
                 "wall_s": time.perf_counter() - drop_start,
                 "cpu_s": time.process_time() - drop_cpu}
         random_seed = method_seed(self.config.seed, spec.name, trial)
-        picks = [self._pick(rig, settled.state, MethodRun(name, random_seed), spec.name, trial)
-                 for name in rig.methods]
+        physics = trial_physics(self.config, spec.name, trial)
+        picks = [self._pick(rig, settled.state, MethodRun(name, random_seed), spec.name, trial,
+                            physics) for name in rig.methods]
         return {"part": spec.name, "trial": trial, "pile": pile, "picks": picks,
+                **({"physics": physics.to_dict()} if physics is not None else {}),
                 "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
 
     def _rig_for(self, spec: PartSpec) -> PickRig:
@@ -154,9 +167,9 @@ class TrialWorker:
         return self._rigs[spec.name]
 
     def _pick(self, rig: PickRig, state: np.ndarray, run: MethodRun, part: str,
-              trial: int) -> dict:
+              trial: int, physics: PickPhysics | None = None) -> dict:
         start, cpu = time.perf_counter(), time.process_time()
-        pick = rig.pick(state, run)
+        pick = rig.pick(state, run, physics)
         row = pick_row(run.name, pick.record, {
             "sim_s": round(pick.sim_s, 3), "wall_s": time.perf_counter() - start,
             "cpu_s": time.process_time() - cpu,

@@ -57,6 +57,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="also write a tile of each failed pick (the top view at pick time "
                              "with the chosen grasp) into OUT/gallery, by method and failure "
                              "kind, linked from report.md")
+    parser.add_argument("--perturb", action="store_true",
+                        help="pick under perturbed physics: each pile's friction, finger-pad "
+                             "stiffness and grasp error drawn at random (seeded, the same for "
+                             "every method on the pile), so a method's lead is seen to survive "
+                             "a simulator that is not the one its model learnt")
     parser.add_argument("--quick", action="store_true",
                         help="a quick check (for CI): unless given, u_hook only, random and "
                              "graspability, 2 trials; piles of 6 parts")
@@ -79,6 +84,7 @@ def command_line(args: argparse.Namespace) -> str:
     words += ["--open-loop"] if args.open_loop else []
     words += ["--quick"] if args.quick else []
     words += ["--gallery"] if args.gallery else []
+    words += ["--perturb"] if args.perturb else []
     return shlex.join([*words, "--out", str(args.out)])
 
 
@@ -90,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
         methods=args.methods, parts=args.parts, mesh_scale=args.mesh_scale, trials=args.trials,
         workers=args.workers, ray=args.ray, out=args.out, mode=args.mode, seed=args.seed,
         scenario=args.scenario, quick=args.quick, clear=args.clear, open_loop=args.open_loop,
-        gallery=args.gallery, command=command_line(args)))
+        gallery=args.gallery, perturb=args.perturb, command=command_line(args)))
     if args.clear:
         from tangle_drake.bench.clear_report import terminal_clear_summary
 

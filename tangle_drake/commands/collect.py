@@ -67,6 +67,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "the open hand plus 2 cm a side); resampled to 96 px")
     parser.add_argument("--full-depth", action="store_true",
                         help="also store each sample's whole depth image (~1.2 MB each)")
+    parser.add_argument("--no-randomise", dest="randomise", action="store_false",
+                        help="--label pick: pick under the model's physics, not under a draw "
+                             "per pick of friction, finger-pad stiffness and grasp error")
     parser.add_argument("--scenario", default=None,
                         help="data scenario YAML (default: the shipped tangle_data.yaml; "
                              "with --label pick the benchmark's floating_gripper.yaml)")
@@ -130,6 +133,8 @@ def pick_settings_from_args(args: argparse.Namespace):
                                "(--label lift); a physical pick has none")
     settings = PickDataSettings(part=args.part, mesh_scale=args.mesh_scale, seed=args.seed,
                                 parts_per_pile=args.parts_per_pile)
+    if not args.randomise:
+        settings = replace(settings, physics=None)
     if args.top_k is not None:
         settings = replace(settings, top_k=args.top_k)
     if args.crop_size is not None:
@@ -141,6 +146,11 @@ def pick_settings_from_args(args: argparse.Namespace):
 def run(args: argparse.Namespace) -> int:
     if args.label == "pick":
         return run_picks(args)
+    if not args.randomise:
+        from tangle_drake.errors import TangleDrakeError
+
+        raise TangleDrakeError("--no-randomise is an option of --label pick; the force lift "
+                               "runs the model's physics (--repeat measures its stability)")
     from tangle_drake.tangle_data.collect import collect
 
     settings, scenario_text = settings_from_args(args)

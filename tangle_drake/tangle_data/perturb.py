@@ -1,12 +1,17 @@
-"""Small perturbations of a settled pile, to measure how stable the lift's labels are.
+"""Small perturbations of the simulated physics: of a settled pile, to measure how stable the
+lift's labels are, and of each physical pick, so that a model does not learn one simulator's
+gripper.
 
 A label that flips when every part moves by a millimetre or the friction changes by a few
 percent is a coin toss the CNN cannot learn. ``--repeat K`` re-runs each lift K-1 more times
-under these perturbations and records how many of the K lifts said *tangled*.
+under these perturbations and records how many of the K lifts said *tangled*. A physical pick
+(:class:`PickPhysics`) draws its friction, the finger pads' stiffness and a small error of the
+grasp pose from a :class:`PhysicsSpread`, seeded per pick.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,6 +22,8 @@ from pydrake.multibody.math import SpatialVelocity
 from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import Body
 from pydrake.systems.framework import Context
+
+from tangle_drake.errors import TangleDrakeError
 
 
 @dataclass(frozen=True)
@@ -31,11 +38,70 @@ class Perturbation:
     """Simulated time to let the parts push out of the overlaps the noise made."""
 
 
-class FrictionScaler:
-    """Scales the friction of every collision geometry, in one context, by one factor.
+@dataclass(frozen=True)
+class PhysicsSpread:
+    """How far each physical pick's physics is drawn from the model's (0: not at all)."""
+
+    friction: float = 0.2
+    """Every contact's friction is scaled by a factor uniform in [1 - f, 1 + f]."""
+    pad_stiffness: float = 0.5
+    """The finger pads' hydroelastic modulus is scaled by a factor log-uniform in
+    [1 / (1 + s), 1 + s] (rubber pads vary, and wear)."""
+    position_m: float = 0.002
+    """Standard deviation of the grasp's error along each horizontal axis, m (the camera's
+    calibration and the robot's repeatability)."""
+    angle_deg: float = 3.0
+    """...and of its error about the vertical, degrees."""
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.friction < 1:
+            raise TangleDrakeError(f"friction spread must lie in [0, 1), got {self.friction}")
+        for name in ("pad_stiffness", "position_m", "angle_deg"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise TangleDrakeError(f"{name} spread must be >= 0, got {value!r}")
+
+
+@dataclass(frozen=True)
+class PickPhysics:
+    """One pick's draw: contact factors, and the grasp pose's error."""
+
+    friction: float = 1.0
+    pad_stiffness: float = 1.0
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """The grasp's error: world x and y, m, and about the vertical, degrees."""
+
+    @classmethod
+    def draw(cls, spread: PhysicsSpread, rng: np.random.Generator) -> PickPhysics:
+        stiffness = np.log1p(spread.pad_stiffness)
+        return cls(friction=float(rng.uniform(1 - spread.friction, 1 + spread.friction)),
+                   pad_stiffness=float(np.exp(rng.uniform(-stiffness, stiffness))),
+                   offset=(float(rng.normal(0, spread.position_m)),
+                           float(rng.normal(0, spread.position_m)),
+                           float(rng.normal(0, spread.angle_deg))))
+
+    def to_dict(self) -> dict:
+        return {"friction": round(self.friction, 6), "pad_stiffness": round(self.pad_stiffness, 6),
+                "offset": [round(x, 6) for x in self.offset]}
+
+
+def offset_pose(pose: np.ndarray, offset: tuple[float, float, float]) -> np.ndarray:
+    """``pose`` (4x4, world) moved by ``offset``: x, y (m) and a turn about the vertical
+    through its origin (degrees)."""
+    dx, dy, angle = offset
+    moved = np.array(pose, dtype=float)
+    moved[:3, :3] = RotationMatrix.MakeZRotation(np.radians(angle)).matrix() @ moved[:3, :3]
+    moved[:2, 3] += (dx, dy)
+    return moved
+
+
+class ContactScaler:
+    """Scales, in one context, the friction of every collision geometry and the stiffness of
+    every compliant one (the finger pads: the only geometries with a hydroelastic modulus).
 
     Drake combines two geometries' friction as ``2ab / (a + b)``, so scaling every geometry's
-    coefficients by ``c`` scales every contact's friction by exactly ``c``.
+    coefficients by ``c`` scales every contact's friction by exactly ``c``. Restoring a saved
+    context restores both (SceneGraph keeps geometry properties in the context's parameters).
     """
 
     def __init__(self, plant: MultibodyPlant, scene_graph: SceneGraph) -> None:
@@ -48,15 +114,21 @@ class FrictionScaler:
             if props is not None and props.HasProperty("material", "coulomb_friction"):
                 self.original[geometry] = ProximityProperties(props)
 
-    def apply(self, root_context: Context, factor: float) -> None:
-        """Set every geometry's friction to ``factor`` times its model value."""
+    def apply(self, root_context: Context, friction: float = 1.0,
+              pad_stiffness: float = 1.0) -> None:
+        """Set every geometry's friction, and every compliant one's hydroelastic modulus, to
+        these factors times the model's values."""
         context = self.scene_graph.GetMyMutableContextFromRoot(root_context)
         source = self.plant.get_source_id()
         for geometry, props in self.original.items():
-            friction = props.GetProperty("material", "coulomb_friction")
+            coulomb = props.GetProperty("material", "coulomb_friction")
             scaled = ProximityProperties(props)
             scaled.UpdateProperty("material", "coulomb_friction", CoulombFriction(
-                factor * friction.static_friction(), factor * friction.dynamic_friction()))
+                friction * coulomb.static_friction(), friction * coulomb.dynamic_friction()))
+            if props.HasProperty("hydroelastic", "hydroelastic_modulus"):
+                modulus = props.GetProperty("hydroelastic", "hydroelastic_modulus")
+                scaled.UpdateProperty("hydroelastic", "hydroelastic_modulus",
+                                      pad_stiffness * modulus)
             self.scene_graph.AssignRole(context, source, geometry, scaled, RoleAssign.kReplace)
 
 

@@ -10,6 +10,8 @@ stored with what came up, counted by the simulation: ``outcome`` 1 = exactly one
 ``label`` (tangled) 1 = several, 0 = one, -1 = none. A candidate that could not be picked
 (unreachable, in collision) is no label: the task's record lists it with its reason. So the
 dataset says, per pile, what each of the five candidates would have done: the top-5 oracle.
+Each pick runs under its own draw of the physics (friction, the pads' stiffness, a few mm and
+degrees of grasp error; :class:`~.perturb.PhysicsSpread`), recorded in the task's record.
 
 Pile seeds come from the collection seed (:mod:`.seeds`), not the benchmark's, so a model
 trained on these piles is tested on others.
@@ -20,7 +22,7 @@ from __future__ import annotations
 import math
 import resource
 import time
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -37,7 +39,8 @@ from tangle_drake.pick import pick_log
 from tangle_drake.pick.outcome import Outcome
 from tangle_drake.pick.recovery import Verdict
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
-from tangle_drake.tangle_data.seeds import pile_seed
+from tangle_drake.tangle_data.perturb import PhysicsSpread, PickPhysics
+from tangle_drake.tangle_data.seeds import physics_rng, pile_seed
 from tangle_drake.tangle_data.simulator import TaskResult
 
 LABEL = "pick"
@@ -63,6 +66,9 @@ class PickDataSettings:
     """Graspability's first candidates picked per pile (the paper's top five)."""
     seed: int = 0
     crop: CropSpec = DEFAULT_CROP
+    physics: PhysicsSpread | None = field(default_factory=PhysicsSpread)
+    """Each pick's friction, pad stiffness and grasp error drawn from this (seeded per pick),
+    so a model learns picking, not one simulator's gripper; ``None``: the model's physics."""
 
     def validate(self) -> None:
         if not (math.isfinite(self.mesh_scale) and self.mesh_scale > 0):
@@ -115,12 +121,15 @@ class PhysicalPickSimulator:
         settled = self.rig.settle(seed)
         rows = PickRows(s, self.part.name, self.rig.intrinsics)
         stats = {"task": task, "pile_seed": seed, "samples": 0, "tangled": 0, "one": 0,
-                 "none": 0, "failed": 0, "failures": [], "sim_s": 0.0,
+                 "none": 0, "failed": 0, "failures": [], "physics": [], "sim_s": 0.0,
                  "pile": {"settled": settled.report.settled,
                           "in_bin": settled.report.num_in_bin,
                           "settle_time_s": settled.report.settle_time}}
         for rank in range(s.top_k):
-            pick = self.rig.pick(settled.state, MethodRun("graspability", 0, only=rank))
+            physics = None if s.physics is None else \
+                PickPhysics.draw(s.physics, physics_rng(s.seed, task, rank))
+            pick = self.rig.pick(settled.state, MethodRun("graspability", 0, only=rank),
+                                 physics)
             record = pick.record
             stats["sim_s"] += pick.sim_s
             if record is not None and record.failure is FailureKind.NO_CANDIDATE:
@@ -131,6 +140,8 @@ class PhysicalPickSimulator:
                 stats["failures"].append({"rank": rank, "failure": why.value})
                 continue
             rows.add(pick, rank, seed, task)
+            if physics is not None:
+                stats["physics"].append({"rank": rank, **physics.to_dict()})
             stats["samples"] += 1
             stats["tangled"] += record.outcome is Outcome.SEVERAL
             stats["one"] += record.outcome is Outcome.ONE

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-_PILE, _CHOICE, _PERTURB = 0, 1, 2
+_PILE, _CHOICE, _PERTURB, _PHYSICS = 0, 1, 2, 3
 
 
 def _stream(seed: int, task: int, purpose: int, *more: int) -> np.random.SeedSequence:
@@ -28,3 +28,8 @@ def choice_rng(seed: int, task: int) -> np.random.Generator:
 def perturbation_rng(seed: int, task: int, rank: int, repeat: int) -> np.random.Generator:
     """Random generator of the ``repeat``-th perturbed re-run of the lift of candidate ``rank``."""
     return np.random.default_rng(_stream(seed, task, _PERTURB, rank, repeat))
+
+
+def physics_rng(seed: int, task: int, rank: int) -> np.random.Generator:
+    """Random generator of the physics of the physical pick of candidate ``rank``."""
+    return np.random.default_rng(_stream(seed, task, _PHYSICS, rank))

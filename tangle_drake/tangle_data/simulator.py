@@ -27,7 +27,7 @@ from tangle_drake.station import build_station, camera_model
 from tangle_drake.tangle_data.closing_region import RegionBox, parts_in_region, surface_points
 from tangle_drake.tangle_data.labels import PickLabel, label_pick
 from tangle_drake.tangle_data.lift import ForceLift, LiftResult
-from tangle_drake.tangle_data.perturb import FrictionScaler, Perturbation, jiggle_parts
+from tangle_drake.tangle_data.perturb import ContactScaler, Perturbation, jiggle_parts
 from tangle_drake.tangle_data.pile_stats import pile_depth
 from tangle_drake.tangle_data.samples import SampleRows
 from tangle_drake.tangle_data.seeds import choice_rng, perturbation_rng, pile_seed
@@ -71,7 +71,7 @@ class TangleDataSimulator:
         self.region = RegionBox.of_gripper(settings.gripper, settings.labels.region_margin_m)
         self.lifter = ForceLift(self.simulator, self.plant, self.bodies, self.part, self.points,
                                 self.scenario.bin, settings.lift)
-        self.friction = FrictionScaler(self.plant, self.station.scene_graph)
+        self.contacts = ContactScaler(self.plant, self.station.scene_graph)
         self.perturbation = Perturbation()
         self.lifts_run = 0
         """Lifts simulated so far (tests check that immediate labels simulate nothing)."""
@@ -176,8 +176,8 @@ class TangleDataSimulator:
             self.restore(settled)
             rng = perturbation_rng(self.settings.seed, task, rank, r)
             context = self.simulator.get_mutable_context()
-            self.friction.apply(context, rng.uniform(1 - p.friction_spread,
-                                                     1 + p.friction_spread))
+            self.contacts.apply(context, friction=rng.uniform(1 - p.friction_spread,
+                                                              1 + p.friction_spread))
             jiggle_parts(self.plant, plant_context, self.bodies, p, rng)
             self.simulator.AdvanceTo(context.get_time() + p.resettle_s)
             self.lifts_run += 1
