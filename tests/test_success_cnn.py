@@ -16,8 +16,9 @@ from tangle_drake.pick.selection import resolve_tangle_choice
 from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
 from tangle_drake.tangle_cnn.evaluate import evaluate_model
 from tangle_drake.tangle_cnn.model import load_tangle_model
-from tangle_drake.tangle_cnn.objectives import SUCCESS
+from tangle_drake.tangle_cnn.objectives import OUTCOME, SUCCESS
 from tangle_drake.tangle_cnn.synthetic import (
+    FLOOR_M,
     GRASP_DEPTH_M,
     synthetic_crop,
     write_synthetic_dataset,
@@ -34,7 +35,7 @@ run_train = partial(run_command, "train")
 @pytest.fixture(scope="module")
 def picks(tmp_path_factory) -> Path:
     directory = tmp_path_factory.mktemp("picks")
-    write_synthetic_dataset(directory, 192, seed=3, outcomes=True)
+    write_synthetic_dataset(directory, 256, seed=3, outcomes=True)
     return directory
 
 
@@ -48,8 +49,11 @@ def lifts(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def models(picks, lifts, tmp_path_factory) -> dict[str, Path]:
     out = tmp_path_factory.mktemp("models")
-    paths = {"success": out / "bars.success.pt", "tangled": out / "bars.pt"}
-    train(picks, paths["success"], TrainSettings(epochs=3, seed=2, objective="success"),
+    paths = {"success": out / "bars.success.pt", "tangled": out / "bars.pt",
+             "outcome": out / "bars.outcome.pt"}
+    train(picks, paths["success"], TrainSettings(epochs=4, seed=2, objective="success"),
+          device="cpu", log=lambda line: None)
+    train(picks, paths["outcome"], TrainSettings(epochs=4, seed=2, objective="outcome"),
           device="cpu", log=lambda line: None)
     train(lifts, paths["tangled"], TrainSettings(epochs=1, seed=2), device="cpu",
           log=lambda line: None)
@@ -70,10 +74,26 @@ def test_the_success_cnn_learns_p_success_and_says_so(models):
     assert model.objective is SUCCESS
     assert read_checkpoint(models["success"])["objective"] == "success"
     rng = np.random.default_rng(7)
-    crossing = np.arange(60) % 2 == 1  # several or none came up
+    crossing = np.arange(60) % 2 == 1  # several parts came up
     crops = np.stack([synthetic_crop(bool(c), 32, rng) for c in crossing])
     p_success = model.predict(crops, np.full(60, GRASP_DEPTH_M))
     assert ((p_success > 0.5) == ~crossing).mean() > 0.9
+
+
+def test_the_outcome_model_tells_one_part_from_a_tangle_from_an_empty_grasp(models):
+    model = load_tangle_model(models["outcome"])
+    assert model.objective is OUTCOME and model.network.config.classes == 3
+    rng = np.random.default_rng(8)
+    truth = np.arange(90) % 3  # 0 one part, 1 several, 2 none
+    crops = np.stack([synthetic_crop(k == 1, 32, rng) if k < 2 else
+                      np.full((32, 32), FLOOR_M, np.float32) + rng.normal(0, 5e-4, (32, 32))
+                      for k in truth]).astype(np.float32)
+    probabilities = model.probabilities(crops, np.full(90, GRASP_DEPTH_M))
+    assert probabilities.shape == (90, 3)
+    assert np.allclose(probabilities.sum(axis=1), 1, atol=1e-5)
+    assert (probabilities.argmax(axis=1) == truth).mean() > 0.85
+    assert np.array_equal(model.predict(crops, np.full(90, GRASP_DEPTH_M)),
+                          probabilities[:, 0])  # P(one part) is what the rules read
 
 
 def test_evaluation_breaks_a_success_model_down_by_outcome(models, picks):
@@ -84,21 +104,32 @@ def test_evaluation_breaks_a_success_model_down_by_outcome(models, picks):
                             "exactly one part came up"}
     assert sum(group.samples for group in result.groups) == result.samples
     assert result.accuracy > 0.8
+    assert sum(b.samples for b in result.calibration) == result.samples
+    assert result.class_accuracy is None  # two classes
+    three = evaluate_model(load_tangle_model(models["outcome"]), picks)
+    assert three.classes == ("one part", "several parts", "no part")
+    assert three.class_accuracy > 0.8 and len(three.class_recall) == 3
 
 
 def test_each_model_serves_its_rules_and_is_refused_by_the_others(models):
     success, tangled = models["success"], models["tangled"]
     TangleCnnSystem(success, INTRINSICS, "success-cnn", warm_up=0)
+    for rule in ("success-cnn", "success-harmonic"):
+        TangleCnnSystem(models["outcome"], INTRINSICS, rule, warm_up=0)
+    with pytest.raises(TangleDrakeError, match="--objective success or outcome"):
+        TangleCnnSystem(tangled, INTRINSICS, "success-harmonic", warm_up=0)
     TangleCnnSystem(tangled, INTRINSICS, "harmonic", warm_up=0)
     for rule in ("harmonic", "cnn"):
-        with pytest.raises(TangleDrakeError, match=rf"the {rule} rule needs a model of "
-                                                   r"P\(not tangled\).*success-cnn rule"):
+        with pytest.raises(TangleDrakeError,
+                           match=rf"the {rule} rule needs a model of P\(not tangled\).*"
+                                 r"success-cnn or success-harmonic rule"):
             TangleCnnSystem(success, INTRINSICS, rule, warm_up=0)
     with pytest.raises(TangleDrakeError, match=r"needs a model of P\(success\)"):
         TangleCnnSystem(tangled, INTRINSICS, "success-cnn", warm_up=0)
     # A checkpoint given by path picks with the rule of its objective.
     assert parse_method(f"model:{success}").rule == "success-cnn"
     assert parse_method(f"model:{tangled}").rule == "harmonic"
+    assert parse_method(f"model:{models['outcome']}").rule == "success-harmonic"
     assert resolve_tangle_choice("u_hook", model=success).rule == "success-cnn"
 
 

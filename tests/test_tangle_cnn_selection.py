@@ -81,7 +81,7 @@ def test_random_draws_among_the_top_five_from_the_seed_and_the_candidates():
 
 def test_only_the_cnn_rules_need_the_model():
     assert [rule for rule in RULES if needs_model(rule)] == list(MODEL_RULES) == [
-        "cnn", "harmonic", "emap-harmonic", "success-cnn"]
+        "cnn", "harmonic", "emap-harmonic", "success-cnn", "success-harmonic"]
     for rule in MODEL_RULES:
         with pytest.raises(ValueError, match="needs P"):
             rank(rule, GRASPABILITY)

@@ -180,7 +180,7 @@ def test_bad_datasets_are_named(tmp_path):
 
     crop = {"crop": asdict(CropSpec(0.05, 32))}
     one_class = dataset_with(tmp_path / "one", crop, label=np.ones(32))
-    with pytest.raises(TangleDrakeError, match="only tangled samples"):
+    with pytest.raises(TangleDrakeError, match="holds no not tangled samples"):
         train(one_class, tmp_path / "m.pt", settings)
     one_pile = dataset_with(tmp_path / "pile", crop, pile_seed=np.zeros(32))
     with pytest.raises(TangleDrakeError, match="single pile"):

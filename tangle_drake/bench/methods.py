@@ -1,8 +1,8 @@
 """The benchmark's methods: how each picks a candidate, and the system that switches them.
 
-=================== ========================================================================
-method              the candidate tried first
-=================== ========================================================================
+==================== =======================================================================
+method               the candidate tried first
+==================== =======================================================================
 ``random``          one drawn uniformly among graspability's top 5 (seeded per trial): the
                     baseline that knows nothing but where a grasp is possible
 ``graspability``    the best graspability index (Domae et al. 2014), no CNN
@@ -12,10 +12,12 @@ method              the candidate tried first
                     success/failure checkpoint ranks by its P(success) instead
 ``success-cnn``     the seed's second baseline (Matsumura et al. 2018): the highest P(success)
                     from the part's success/failure CNN, ``trained/<part>.success.pt``
+``success-harmonic`` the harmonic mean of graspability and that P(success) (a pick-outcome
+                    model's P(one part) serves both)
 ``emap``            Zhang et al. 2021: graspability re-ranked by low entanglement (the
                     topological entanglement map, no training)
 ``emap-harmonic``   the harmonic mean of graspability, P(not tangled) and 1 - entanglement
-=================== ========================================================================
+==================== =======================================================================
 
 The rules, what ``random`` draws from and the order the planner tries candidates in are
 :mod:`tangle_drake.tangle_cnn.selection`'s, the same as the demo's. ``cnn`` and ``harmonic``

@@ -70,18 +70,27 @@ def _report(result, model_path: Path) -> str:
         return "n/a" if value is None else f"{100 * value:.1f} %"
 
     low, high = result.accuracy_interval
+    bad = result.classes[1] if len(result.classes) == 2 else f"not {result.classes[0]}"
     lines = [
         f"{model_path} on {result.data} ({result.scope}): {result.samples} samples, "
-        f"{result.tangled} {result.classes[1]}, {result.piles} piles",
+        f"{result.tangled} {bad}, {result.piles} piles",
         f"accuracy {share(result.accuracy)} [{100 * low:.1f}, {100 * high:.1f}]  "
         f"balanced accuracy {share(result.balanced_accuracy)}  "
         f"precision {share(result.precision)}  recall {share(result.recall)}  "
         f"ROC-AUC {'n/a' if result.auc is None else f'{result.auc:.3f}'}",
     ]
+    if result.class_accuracy is not None:
+        recalls = ", ".join(f"{name} {share(value)}" for name, value in
+                            zip(result.classes, result.class_recall, strict=True))
+        lines.append(f"most probable class right {share(result.class_accuracy)}; recall: "
+                     f"{recalls}")
+    if result.calibration:
+        lines.append(f"calibration of P({result.classes[0]}): " + ", ".join(
+            f"{b.low:.1f}-{b.high:.1f}: {b.observed:.2f} of {b.samples}"
+            for b in result.calibration))
     if result.groups:
         width = max(len(group.name) for group in result.groups)
-        lines.append(f"{'label came about as':{width}}  samples  right   "
-                     f"mean P({result.classes[1]})")
+        lines.append(f"{'label came about as':{width}}  samples  right   mean P({bad})")
         for group in result.groups:
             right = share(group.correct / group.samples) if group.samples else "n/a"
             mean = "n/a" if group.mean_p_tangled is None else f"{group.mean_p_tangled:.2f}"

@@ -46,7 +46,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="tangled (default): the paper's tangle CNN, from the tangle "
                              "labels; success: the seed's success/failure baseline, from the "
                              "outcomes of physical picks (collect --label pick), ranked by "
-                             "P(success) with the success-cnn rule")
+                             "P(success) with the success-cnn rule; outcome: three classes "
+                             "(one part, several, none) from the same data, picking with "
+                             "success-harmonic (graspability and P(one part))")
     parser.add_argument("--device", choices=("auto", "cpu", "cuda"), default="auto",
                         help="auto: CUDA when available, else the CPU")
     parser.add_argument("--restart", action="store_true",

@@ -24,9 +24,9 @@ from tangle_drake.bench.stats import wilson
 from tangle_drake.crops import CropSpec
 from tangle_drake.dataset import stored_fields
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.tangle_cnn.metrics import balanced_accuracy, binary_metrics
+from tangle_drake.tangle_cnn.metrics import balanced_accuracy, binary_metrics, class_metrics
 from tangle_drake.tangle_cnn.model import TangleModel
-from tangle_drake.tangle_cnn.objectives import SUCCESS, TANGLED
+from tangle_drake.tangle_cnn.objectives import TANGLED
 from tangle_drake.tangle_cnn.split import split_by_pile, undersample
 from tangle_drake.tangle_cnn.training_data import fingerprint, load_checked_samples
 
@@ -47,6 +47,30 @@ class Group:
     samples: int
     correct: int
     mean_p_tangled: float | None
+
+
+@dataclass(frozen=True)
+class Bin:
+    """Samples whose predicted probability fell in one bin, and what came true."""
+
+    low: float
+    high: float
+    samples: int
+    mean_predicted: float
+    observed: float
+
+
+CALIBRATION_BINS = 10
+
+
+def calibration(p_good: np.ndarray, good: np.ndarray,
+                bins: int = CALIBRATION_BINS) -> tuple[Bin, ...]:
+    """The reliability table of ``p_good`` against the truth ``good``: non-empty bins only."""
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    which = np.clip(np.digitize(p_good, edges[1:-1]), 0, bins - 1)
+    return tuple(Bin(float(edges[k]), float(edges[k + 1]), int((which == k).sum()),
+                     float(p_good[which == k].mean()), float(good[which == k].mean()))
+                 for k in range(bins) if (which == k).any())
 
 
 @dataclass(frozen=True)
@@ -72,9 +96,17 @@ class Evaluation:
     groups: tuple[Group, ...]
     """By cause of the label; empty when the dataset does not record the causes."""
     objective: str = TANGLED.name
-    """What the model predicts (:mod:`.objectives`); ``tangled`` counts its class 1
-    (tangled, or failure), ``precision`` and ``recall`` are that class's."""
-    classes: tuple[str, str] = TANGLED.classes
+    """What the model predicts (:mod:`.objectives`); ``tangled`` counts the samples not of
+    its class 0 (tangled; failure: several parts or none), ``precision`` and ``recall`` are
+    theirs, at P(class 0) < 0.5."""
+    classes: tuple[str, ...] = TANGLED.classes
+    class_accuracy: float | None = None
+    """With three classes or more: how often the most probable class is the true one..."""
+    class_recall: list | None = None
+    """...and each class's recall (``None`` for a class the samples lack)."""
+    calibration: tuple[Bin, ...] = ()
+    """How well P(class 0) is calibrated: the samples in ten bins of it, each with its mean
+    prediction and how often class 0 was the truth."""
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -90,17 +122,21 @@ def evaluate_model(model: TangleModel, directory: Path,
     samples, crop, manifest = load_checked_samples(directory, causes, objective)
     labels = samples["label"].astype(np.int64)
     _check_crop(model.crop, crop, directory)
-    rows, scope = _scored_rows(model, samples, labels)
-    p_tangled = np.empty(len(rows), dtype=np.float64)
+    rows, scope = _scored_rows(model, samples, labels, len(objective.classes))
+    probabilities = np.empty((len(rows), len(objective.classes)), dtype=np.float64)
     for first in range(0, len(rows), BATCH):
         batch = rows[first:first + BATCH]
-        p_tangled[first:first + len(batch)] = 1.0 - model.predict(samples["crop"][batch],
-                                                                  samples["depth_m"][batch])
+        probabilities[first:first + len(batch)] = model.probabilities(
+            samples["crop"][batch], samples["depth_m"][batch])
         if progress is not None:
             progress(len(batch))
-    truth = labels[rows]
+    # P(not the good class), as float32 arithmetic then float64, as it always was.
+    p_tangled = (1.0 - probabilities[:, 0].astype(np.float32)).astype(np.float64)
+    classes = labels[rows]
+    truth = (classes != 0).astype(np.int64)
     metrics = binary_metrics(truth, p_tangled)
     correct = int(((p_tangled > 0.5) == truth.astype(bool)).sum())
+    several = class_metrics(classes, probabilities) if len(objective.classes) > 2 else {}
     return Evaluation(
         data=str(directory), data_part=manifest.get("part"), model_part=model.info.get("part"),
         scope=scope, samples=len(rows), tangled=int(truth.sum()),
@@ -108,9 +144,12 @@ def evaluate_model(model: TangleModel, directory: Path,
         accuracy=float(metrics["accuracy"]), accuracy_interval=wilson(correct, len(rows)),
         balanced_accuracy=balanced_accuracy(truth, p_tangled), precision=metrics["precision"],
         recall=metrics["recall"], auc=metrics["auc"],
-        groups=(_outcome_groups(samples, rows, truth, p_tangled) if objective is SUCCESS else
+        groups=(_outcome_groups(samples, rows, truth, p_tangled)
+                if objective.field == "outcome" else
                 _groups(samples, manifest, rows, truth, p_tangled)),
-        objective=objective.name, classes=objective.classes)
+        objective=objective.name, classes=objective.classes,
+        class_accuracy=several.get("class_accuracy"), class_recall=several.get("class_recall"),
+        calibration=calibration(1.0 - p_tangled, truth == 0))
 
 
 def _check_crop(model_crop: CropSpec, data_crop: CropSpec, directory: Path) -> None:
@@ -123,7 +162,7 @@ def _check_crop(model_crop: CropSpec, data_crop: CropSpec, directory: Path) -> N
 
 
 def _scored_rows(model: TangleModel, samples: dict[str, np.ndarray],
-                 labels: np.ndarray) -> tuple[np.ndarray, str]:
+                 labels: np.ndarray, classes: int) -> tuple[np.ndarray, str]:
     """All rows, or the balanced validation rows when this is the model's training data."""
     data = model.info.get("data") or {}
     training = model.info.get("training") or {}
@@ -132,7 +171,7 @@ def _scored_rows(model: TangleModel, samples: dict[str, np.ndarray],
     seed = int(training.get("seed", 0))
     _, validation = split_by_pile(samples["pile_seed"],
                                   float(training.get("validation_fraction", 0.1)), seed)
-    return (undersample(validation, labels, seed),
+    return (undersample(validation, labels, seed, classes),
             "the model's validation piles (this is its training data), classes balanced as in "
             "training")
 

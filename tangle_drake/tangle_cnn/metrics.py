@@ -50,6 +50,23 @@ def binary_metrics(labels: np.ndarray, p_tangled: np.ndarray) -> dict[str, float
     }
 
 
+def class_metrics(labels: np.ndarray, probabilities: np.ndarray) -> dict:
+    """A model's figures from its class probabilities ``(N, classes)``: :func:`binary_metrics`
+    of class 0 (the good outcome) against the others, as P(not class 0) (for the tangle CNN:
+    of *tangled*, exactly as before), and with three classes or more the accuracy of the most
+    probable class and each class's recall too."""
+    labels = np.asarray(labels)
+    probabilities = np.asarray(probabilities)
+    metrics: dict = binary_metrics(labels != 0, probabilities[:, 1:].sum(axis=1))
+    if probabilities.shape[1] > 2:
+        predicted = probabilities.argmax(axis=1)
+        metrics["class_accuracy"] = float((predicted == labels).mean()) if len(labels) else None
+        metrics["class_recall"] = [float((predicted[labels == k] == k).mean())
+                                   if (labels == k).any() else None
+                                   for k in range(probabilities.shape[1])]
+    return metrics
+
+
 FEW_PER_CLASS = 30
 """Below this many samples of a class, accuracy and ROC-AUC swing by tens of points from one
 split to the next (a handful of samples gives an AUC of 1.000 by luck)."""

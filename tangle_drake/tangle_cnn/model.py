@@ -44,13 +44,21 @@ class TangleModel:
         self.info = info or {}
         """The checkpoint's metadata (everything but the weights)."""
         self.objective: Objective = checkpoint_objective(self.info)
+        if len(self.objective.classes) != network.config.classes:
+            raise TangleDrakeError(f"a {self.objective.name} model needs "
+                                   f"{len(self.objective.classes)} outputs, the network has "
+                                   f"{network.config.classes}")
         """What :meth:`predict` gives the probability of (P(not tangled) for a tangle CNN)."""
         self.source = source
         """Where the model came from (its file), for messages."""
 
     def predict(self, crops: np.ndarray, grasp_depths: np.ndarray) -> np.ndarray:
-        """P(not tangled) (the objective's good class: P(success) for a success CNN), (N,)
-        float32, of (N, S, S) metric crops at (N,) fingertip depths."""
+        """P(not tangled) (the objective's good class: P(exactly one part) for a success or
+        outcome model), (N,) float32, of (N, S, S) metric crops at (N,) fingertip depths."""
+        return self.probabilities(crops, grasp_depths)[:, 0]
+
+    def probabilities(self, crops: np.ndarray, grasp_depths: np.ndarray) -> np.ndarray:
+        """Every class's probability, (N, classes) float32 (:attr:`objective`'s classes)."""
         crops = np.asarray(crops, dtype=np.float32)
         grasp_depths = np.asarray(grasp_depths, dtype=np.float32)
         size = self.crop.size_px
@@ -63,13 +71,13 @@ class TangleModel:
             raise TangleDrakeError("crops and grasp depths must be finite (extract_crop fills "
                                    "missing pixels)")
         if len(crops) == 0:
-            return np.zeros(0, dtype=np.float32)
+            return np.zeros((0, self.network.config.classes), dtype=np.float32)
         x = torch.from_numpy(self.normalisation.inputs(crops, grasp_depths))
         threads = torch.get_num_threads()
         torch.set_num_threads(INFERENCE_THREADS)
         try:
             with torch.inference_mode():
-                return torch.softmax(self.network(x), dim=1)[:, 0].numpy()
+                return torch.softmax(self.network(x), dim=1).numpy()
         finally:
             torch.set_num_threads(threads)
 

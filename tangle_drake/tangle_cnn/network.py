@@ -1,8 +1,9 @@
 """The tangle CNN's layers: AlexNet's shape (paper Fig. 4), shrunk to run in milliseconds on a CPU.
 
 conv1 (7x7, stride 4) - pool1 - conv2 (5x5) - pool2 - conv3 - conv4 - conv5 (3x3) - pool3 -
-fc1 - fc2 - fc3 -> two logits, index 0 *not tangled* and index 1 *tangled* (the dataset's
-label). Every convolution is batch-normalised (which AlexNet predates); every layer but the
+fc1 - fc2 - fc3 -> one logit per class of the model's objective (:mod:`.objectives`; the
+tangle CNN's two: index 0 *not tangled*, 1 *tangled*, the dataset's label). Every
+convolution is batch-normalised (which AlexNet predates); every layer but the
 last is followed by a ReLU; weights start from He (Kaiming) initialisation; pools are 2x2
 max-pools; the hidden fully connected layers have dropout. With the defaults (96 px input) it
 has about 270 k parameters (1.1 MB of float32), and five candidates take a few milliseconds on
@@ -33,15 +34,19 @@ class NetworkConfig:
     channels: tuple[int, int, int, int, int] = (16, 32, 64, 64, 64)
     """Output channels of conv1..conv5."""
     hidden: tuple[int, int] = (256, 64)
-    """Widths of fc1 and fc2 (fc3 has the two class outputs)."""
+    """Widths of fc1 and fc2 (fc3 has one output per class)."""
     dropout: float = 0.5
     """Dropout probability after fc1 and fc2 (training only)."""
+    classes: int = 2
+    """Outputs of fc3: the objective's classes (2; 3 for the pick-outcome model)."""
 
     def __post_init__(self) -> None:
         if len(self.channels) != 5 or len(self.hidden) != 2:
             raise ValueError("NetworkConfig needs 5 channel counts and 2 hidden widths")
         if min(*self.channels, *self.hidden, self.input_channels) < 1:
             raise ValueError("NetworkConfig channel counts and widths must be positive")
+        if self.classes < 2:
+            raise ValueError(f"NetworkConfig.classes must be at least 2, got {self.classes}")
         if not 0 <= self.dropout < 1:
             raise ValueError(f"NetworkConfig.dropout must be in [0, 1), got {self.dropout}")
         if self.final_side() < 1:
@@ -67,7 +72,7 @@ class NetworkConfig:
 
 
 class TangleNet(nn.Module):
-    """Network input (N, C, S, S) -> class logits (N, 2): [not tangled, tangled]."""
+    """Network input (N, C, S, S) -> class logits (N, classes); class 0 the good outcome."""
 
     def __init__(self, config: NetworkConfig = NetworkConfig()) -> None:
         super().__init__()
@@ -85,7 +90,7 @@ class TangleNet(nn.Module):
         self.classifier = nn.Sequential(
             nn.Linear(c5 * config.final_side() ** 2, h1), nn.ReLU(), nn.Dropout(config.dropout),
             nn.Linear(h1, h2), nn.ReLU(), nn.Dropout(config.dropout),
-            nn.Linear(h2, 2),
+            nn.Linear(h2, config.classes),
         )
         for module in self.modules():
             if isinstance(module, nn.Conv2d | nn.Linear):

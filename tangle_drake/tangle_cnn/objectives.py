@@ -1,12 +1,19 @@
 """What a model learns to predict (its objective), the one place for it: which dataset field its
-labels come from, what its two classes are, and which selection rules its probability serves.
+labels come from, what its classes are, and which selection rules its probability serves.
 
 The network is the same for every objective; class 0 is always the good outcome, so a model's
-prediction is P(class 0): P(not tangled) for the paper's tangle CNN (labels from ``label``, the
-auto-lift's or a pick's), P(success) for the seed's success/failure baseline (Matsumura et al.
-2018; labels from ``outcome``, the physical pick's: success is exactly one part, failure
-several or none). A checkpoint names its objective; one made before objectives existed is a
-tangle CNN. Torch-free.
+prediction is P(class 0):
+
+- ``tangled``, the paper's tangle CNN: P(not tangled), from ``label`` (the auto-lift's or a
+  pick's);
+- ``success``, the seed's success/failure baseline (Matsumura et al. 2018): P(exactly one
+  part), from ``outcome``, the physical pick's (failure: several parts or none);
+- ``outcome``, the pick-outcome model: three classes from ``outcome``, one part / several /
+  none, so it also tells a tangle from an empty grasp; its P(class 0) is P(exactly one part)
+  too, so it serves the same rules as the success CNN.
+
+A checkpoint names its objective; one made before objectives existed is a tangle CNN.
+Torch-free.
 """
 
 from __future__ import annotations
@@ -22,8 +29,8 @@ from tangle_drake.errors import TangleDrakeError
 @dataclass(frozen=True)
 class Objective:
     name: str
-    classes: tuple[str, str]
-    """Class 0 (the good outcome, whose probability the model gives) and class 1."""
+    classes: tuple[str, ...]
+    """Class 0 (the good outcome, whose probability the model gives), then the others."""
     field: str
     """The dataset field the labels come from."""
     codes: dict[int, int]
@@ -47,21 +54,25 @@ class Objective:
 
 TANGLED = Objective("tangled", ("not tangled", "tangled"), "label", {0: 0, 1: 1},
                     "`tangle-drake collect` (either --label)")
-SUCCESS = Objective("success", ("success", "failure"), "outcome", {1: 0, 2: 1, 0: 1},
-                    "`tangle-drake collect --label pick` (or a pick log)")
-OBJECTIVES = {o.name: o for o in (TANGLED, SUCCESS)}
+_PICKS = "`tangle-drake collect --label pick` (or a pick log)"
+SUCCESS = Objective("success", ("success", "failure"), "outcome", {1: 0, 2: 1, 0: 1}, _PICKS)
+OUTCOME = Objective("outcome", ("one part", "several parts", "no part"), "outcome",
+                    {1: 0, 2: 1, 0: 2}, _PICKS)
+OBJECTIVES = {o.name: o for o in (TANGLED, SUCCESS, OUTCOME)}
 DEFAULT_OBJECTIVE = TANGLED.name
 
-RULE_OBJECTIVES = {"cnn": TANGLED, "harmonic": TANGLED, "emap-harmonic": TANGLED,
-                   "success-cnn": SUCCESS}
-"""The model each rule that needs one reads."""
-DEFAULT_RULES = {TANGLED.name: "harmonic", SUCCESS.name: "success-cnn"}
+RULE_OBJECTIVES = {"cnn": (TANGLED,), "harmonic": (TANGLED,), "emap-harmonic": (TANGLED,),
+                   "success-cnn": (SUCCESS, OUTCOME), "success-harmonic": (SUCCESS, OUTCOME)}
+"""The models each rule that needs one can read, the first the one shipped for it."""
+DEFAULT_RULES = {TANGLED.name: "harmonic", SUCCESS.name: "success-cnn",
+                 OUTCOME.name: "success-harmonic"}
 """The rule a model of each objective picks with unless told otherwise."""
 
 
 def rule_objective(rule: str) -> Objective:
-    """The objective of the model ``rule`` reads (a tangle CNN for rules that read none)."""
-    return RULE_OBJECTIVES.get(rule, TANGLED)
+    """The objective of the model shipped for ``rule`` (a tangle CNN for rules that read
+    none)."""
+    return RULE_OBJECTIVES.get(rule, (TANGLED,))[0]
 
 
 def objective_named(name: str) -> Objective:
@@ -79,11 +90,12 @@ def checkpoint_objective(info: dict[str, Any]) -> Objective:
 def check_serves(rule: str, objective: Objective, model: object) -> None:
     """Refuse a ``model`` (named in the message) of ``objective`` for a ``rule`` it cannot
     serve."""
-    needed = RULE_OBJECTIVES.get(rule)
-    if needed is None or needed == objective:
+    served = RULE_OBJECTIVES.get(rule)
+    if served is None or objective in served:
         return
-    fitting = [r for r, o in RULE_OBJECTIVES.items() if o == objective]
+    fitting = [r for r, objectives in RULE_OBJECTIVES.items() if objective in objectives]
+    needed = served[0]
     raise TangleDrakeError(
         f"the {rule} rule needs a model of {needed.probability} (trained with --objective "
-        f"{needed.name}); {model} predicts {objective.probability} (--objective "
-        f"{objective.name}): use it with the {' or '.join(fitting)} rule")
+        f"{' or '.join(o.name for o in served)}); {model} predicts {objective.probability} "
+        f"(--objective {objective.name}): use it with the {' or '.join(fitting)} rule")

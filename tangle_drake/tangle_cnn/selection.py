@@ -10,7 +10,10 @@ Rules (``RULES``), over the candidates of one image (graspability's top-k, best 
 - ``cnn``: the highest P(not tangled);
 - ``success-cnn`` (the seed's second baseline, Matsumura et al. 2018): the highest P(success)
   from a success/failure CNN trained on physical picks (:mod:`.objectives`); it arrives where
-  the others' P(not tangled) does;
+  the others' P(not tangled) does (a pick-outcome model's P(one part) serves it too);
+- ``success-harmonic`` (beyond the paper): the harmonic mean of the normalised graspability
+  and P(exactly one part) from a success or pick-outcome model: the paper's rule with the
+  physical gripper's outcomes in place of the tangle label;
 - ``harmonic`` (the paper): the highest harmonic mean ``2 g p / (g + p)`` of the normalised
   graspability ``g`` and ``p`` = P(not tangled). Graspability is normalised by the best score
   among the image's candidates, ``g = score / max(score)``, so the best candidate has ``g = 1``
@@ -42,8 +45,9 @@ import numpy as np
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.objectives import rule_objective
 
-RULES = ("random", "graspability", "cnn", "harmonic", "emap", "emap-harmonic", "success-cnn")
-MODEL_RULES = ("cnn", "harmonic", "emap-harmonic", "success-cnn")
+RULES = ("random", "graspability", "cnn", "harmonic", "emap", "emap-harmonic", "success-cnn",
+         "success-harmonic")
+MODEL_RULES = ("cnn", "harmonic", "emap-harmonic", "success-cnn", "success-harmonic")
 """The rules that need a trained CNN's probability (which model: :mod:`.objectives`)."""
 EMAP_RULES = ("emap", "emap-harmonic")
 """The rules that need each candidate's entanglement (the entanglement map)."""
@@ -133,7 +137,7 @@ def rank(rule: str, graspability: np.ndarray, p_not_tangled: np.ndarray | None =
         scores, other = g, p
     elif rule in ("cnn", "success-cnn"):
         scores, other = p, g
-    elif rule == "harmonic":
+    elif rule in ("harmonic", "success-harmonic"):
         scores, other = harmonic_mean(normalised_graspability(g), p), g
     else:
         if entanglement is None or np.shape(entanglement) != g.shape:

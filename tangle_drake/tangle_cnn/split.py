@@ -27,14 +27,15 @@ def split_by_pile(pile_seeds: np.ndarray, validation_fraction: float,
     return np.flatnonzero(~is_validation), np.flatnonzero(is_validation)
 
 
-def undersample(indices: np.ndarray, labels: np.ndarray, seed: int) -> np.ndarray:
+def undersample(indices: np.ndarray, labels: np.ndarray, seed: int,
+                classes: int = 2) -> np.ndarray:
     """The subset of ``indices`` with as many of each class as the rarer one has (sorted).
 
     This is how the paper balanced its data (equal numbers of single and multiple picks);
     the dropped samples of the common class are chosen at random with ``seed``.
     """
     rng = np.random.default_rng(seed)
-    by_class = [indices[labels[indices] == label] for label in (0, 1)]
+    by_class = [indices[labels[indices] == label] for label in range(classes)]
     keep = min(len(members) for members in by_class)
     return np.sort(np.concatenate([rng.choice(members, keep, replace=False)
                                    for members in by_class]))

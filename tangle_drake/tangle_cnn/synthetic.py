@@ -72,17 +72,21 @@ def write_synthetic_dataset(directory: Path, count: int, size_px: int = 32,
                             outcomes: bool = False) -> CropSpec:
     """A dataset directory in the collector's format: one shard per pile, a manifest.
 
-    ``outcomes``: as physical picks record them (``collect --label pick``): separate bars
-    brought up one part (``outcome`` 1), crossing bars several (2) or, every other one, none
-    (0, no tangle label)."""
+    ``outcomes``: as physical picks record them (``collect --label pick``): crossing bars
+    brought up several parts (``outcome`` 2), separate bars one (1), except every other of
+    those, whose crop is the bare floor, where the fingers close on nothing (0, no tangle
+    label)."""
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     samples = synthetic_samples(count, size_px, seed)
     if outcomes:
-        crossing = samples["label"] == 1
-        samples["outcome"] = np.where(crossing, np.where(np.arange(count) % 4 == 1, 2, 0),
-                                      1).astype(np.int8)
-        samples["label"] = np.where(samples["outcome"] == 0, -1, samples["label"])
+        empty = np.arange(count) % 4 == 0  # of the separate bars (even rows)
+        rng = np.random.default_rng((seed, 1))
+        samples["crop"][empty] = FLOOR_M + rng.normal(0, 0.0005, (int(empty.sum()), size_px,
+                                                                   size_px))
+        samples["outcome"] = np.where(samples["label"] == 1, 2, np.where(empty, 0, 1)
+                                      ).astype(np.int8)
+        samples["label"] = np.where(empty, -1, samples["label"])
     for task in np.unique(samples["task"]):
         rows = samples["task"] == task
         write_shard(directory, int(task), {name: array[rows] for name, array in samples.items()})

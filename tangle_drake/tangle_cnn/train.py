@@ -40,7 +40,7 @@ from tangle_drake.tangle_cnn.checkpoint import (
     read_checkpoint,
     save_atomic,
 )
-from tangle_drake.tangle_cnn.metrics import binary_metrics, few_samples_warning
+from tangle_drake.tangle_cnn.metrics import class_metrics, few_samples_warning
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION, Normalisation
 from tangle_drake.tangle_cnn.objectives import objective_named
@@ -88,7 +88,11 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
                               objective=objective)
     normalisation = data.normalisation
     config = network or NetworkConfig(input_size=data.crop.size_px,
-                                      input_channels=normalisation.channels)
+                                      input_channels=normalisation.channels,
+                                      classes=len(objective.classes))
+    if config.classes != len(objective.classes):
+        raise TangleDrakeError(f"a network of {config.classes} classes cannot learn the "
+                               f"{objective.name} objective's {len(objective.classes)}")
     if config.input_size != data.crop.size_px:
         raise TangleDrakeError(f"network input {config.input_size} px does not match the "
                                f"data's {data.crop.size_px} px crops")
@@ -114,7 +118,7 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
         f"{data.summary['piles']} piles; training on {len(data.train)} x "
         f"{AUGMENTATIONS[settings.augment]} (augment {settings.augment}), validating on "
         f"{len(data.validation)}; device {dev}")
-    tangled = int(data.labels[data.validation].sum())
+    tangled = int((data.labels[data.validation] != 0).sum())
     if warning := few_samples_warning(tangled, len(data.validation) - tangled,
                                       "the validation split"):
         log(warning)
@@ -123,11 +127,11 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
         epoch = state["epoch"] + 1
         start = time.perf_counter()
         train_loss, train_accuracy = _run_epoch(net, optimiser, data, settings, epoch, dev)
-        val_loss, p_tangled = evaluate(net, data.inputs, data.labels, data.validation, dev)
+        val_loss, probabilities = evaluate(net, data.inputs, data.labels, data.validation, dev)
         record = {"epoch": epoch, "train_loss": train_loss, "train_accuracy": train_accuracy,
                   "val_loss": val_loss,
                   **{f"val_{k}": v for k, v in
-                     binary_metrics(data.labels[data.validation], p_tangled).items()},
+                     class_metrics(data.labels[data.validation], probabilities).items()},
                   "seconds": round(time.perf_counter() - start, 3)}
         state["history"].append(record)
         best = state["history"][state["best_epoch"] - 1] if state["best_epoch"] else None
@@ -202,17 +206,18 @@ def _run_epoch(net: TangleNet, optimiser: torch.optim.Optimizer, data: TrainingD
 
 def evaluate(net: TangleNet, inputs: torch.Tensor, labels: np.ndarray, indices: np.ndarray,
              dev: torch.device) -> tuple[float, np.ndarray]:
-    """Mean cross-entropy and P(tangled) of the samples ``indices`` (eval mode, no dropout)."""
+    """Mean cross-entropy and the class probabilities, (N, classes), of the samples
+    ``indices`` (eval mode, no dropout)."""
     net.eval()
-    total_loss, p_tangled = 0.0, []
+    total_loss, probabilities = 0.0, []
     with torch.inference_mode():
         for first in range(0, len(indices), EVAL_BATCH):
             rows = torch.from_numpy(indices[first:first + EVAL_BATCH])
             logits = net(inputs[rows].to(dev))
             y = torch.from_numpy(labels[rows.numpy()]).to(dev)
             total_loss += float(nn.functional.cross_entropy(logits, y, reduction="sum"))
-            p_tangled.append(torch.softmax(logits, 1)[:, 1].cpu().numpy())
-    return total_loss / len(indices), np.concatenate(p_tangled)
+            probabilities.append(torch.softmax(logits, 1).cpu().numpy())
+    return total_loss / len(indices), np.concatenate(probabilities)
 
 
 def _save(out: Path, state: dict, data: TrainingData, settings: TrainSettings,

@@ -98,21 +98,23 @@ def load_training_data(directory: Path, normalisation: Normalisation,
     samples, crop, manifest = load_checked_samples(directory, objective=objective)
     crops, labels = samples["crop"], samples["label"].astype(np.int64)
     depths, piles = samples["depth_m"], samples["pile_seed"]
-    counts = np.bincount(labels, minlength=2)
+    classes = len(objective.classes)
+    counts = np.bincount(labels, minlength=classes)
     if counts.min() == 0:
-        only = objective.classes[1] if counts[1] else objective.classes[0]
-        raise TangleDrakeError(f"dataset {directory} holds only {only} samples; the CNN needs "
-                               "both classes")
+        lacking = [name for name, n in zip(objective.classes, counts, strict=True) if n == 0]
+        raise TangleDrakeError(f"dataset {directory} holds no {' and no '.join(lacking)} "
+                               f"samples; the {objective.name} model needs every class "
+                               f"({', '.join(objective.classes)})")
     try:
         train_all, validation_all = split_by_pile(piles, validation_fraction, seed)
     except ValueError:
         raise TangleDrakeError(f"dataset {directory} holds a single pile; a split by pile "
                                "needs two or more") from None
-    train = undersample(train_all, labels, seed)
-    validation = undersample(validation_all, labels, seed)
+    train = undersample(train_all, labels, seed, classes)
+    validation = undersample(validation_all, labels, seed, classes)
     for name, part in (("training", train), ("validation", validation)):
         if len(part) == 0:
-            raise TangleDrakeError(f"dataset {directory}: the {name} piles hold only one class; "
+            raise TangleDrakeError(f"dataset {directory}: the {name} piles lack a class; "
                                    "collect more piles")
     gripper = manifest.get("gripper", asdict(DEFAULT_GRIPPER))
     normalisation = replace(normalisation, target_mask=_target_mask(gripper, crop, directory)
