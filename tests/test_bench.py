@@ -243,6 +243,24 @@ def test_the_quick_benchmark_writes_its_report(quick_run, untrained_model):
     assert "| random |" in terminal_summary(summary)
 
 
+def test_the_quick_benchmark_runs_a_pick_outcome_model_with_its_own_rule(tmp_path):
+    torch.manual_seed(0)
+    config = NetworkConfig(input_size=32, classes=3)
+    model = tmp_path / "outcome.pt"
+    save_atomic(model_checkpoint(config, CropSpec(0.05, 32), DEFAULT_NORMALISATION,
+                                 TangleNet(config).state_dict(), part="u_hook",
+                                 objective="outcome"), model)
+    out = tmp_path / "quick"
+    assert main(["bench", "--quick", "--workers", "1", "--out", str(out), "--methods",
+                 "graspability", f"model:{model}"]) == 0
+    identity = json.loads((out / IDENTITY_FILE).read_text())
+    assert [m["rule"] for m in identity["methods"]["u_hook"]] == ["graspability",
+                                                                  "success-harmonic"]
+    picks = [p for t in trials_in(out) for p in t["picks"] if p["method"] == f"model:{model}"]
+    assert len(picks) == 2 and all(p.get("p_not_tangled") is not None for p in picks
+                                   if p["result"] != "failure")  # its P(one part)
+
+
 def test_an_interrupted_run_resumes_without_redoing_finished_trials(tmp_path):
     out = tmp_path / "resume"
     first = run_bench(replace(QUICK, out=out, trials=1), say=lambda _: None)

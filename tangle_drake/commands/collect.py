@@ -165,14 +165,11 @@ def run(args: argparse.Namespace) -> int:
           f"{counts['immediate']} labelled without a lift (two parts in the closing region), "
           f"{counts['empty_region']} candidates skipped (empty closing region), "
           f"{counts['lift_errors']} lifts failed")
-    if result.new_tasks:
-        print(f"this run: {result.new_tasks} piles, "
-              f"{result.per_minute_per_worker:.1f} samples/min/worker")
     if "repeat_all_agree_fraction" in counts:
         print(f"label agreement over {counts['repeat_lifts']} lifts x {settings.repeat}: all "
               f"agree {100 * counts['repeat_all_agree_fraction']:.1f} %, majority agreement "
               f"{100 * counts['repeat_majority_agreement']:.1f} %")
-    return _finish(result)
+    return _finish(result, "samples")
 
 
 def run_picks(args: argparse.Namespace) -> int:
@@ -190,13 +187,14 @@ def run_picks(args: argparse.Namespace) -> int:
           f"({_percent(c['tangled'], c['samples'])}), none {c['none']} "
           f"({_percent(c['none'], c['samples'])}); {c['failed']} candidates could not be "
           "picked (no label)")
+    return _finish(result, "picks")
+
+
+def _finish(result, unit: str) -> int:
+    """Say how fast this run was and whether it was interrupted; the exit code."""
     if result.new_tasks:
         print(f"this run: {result.new_tasks} piles, "
-              f"{result.per_minute_per_worker:.1f} picks/min/worker")
-    return _finish(result)
-
-
-def _finish(result) -> int:
+              f"{result.per_minute_per_worker:.1f} {unit}/min/worker")
     if result.interrupted:
         print("interrupted: every finished pile is kept; run the same command again to "
               "resume where it stopped")
