@@ -1,6 +1,7 @@
 """The part library: built-in wire parts and mesh files become valid, cached Drake models."""
 
 import itertools
+import json
 import logging
 import math
 from pathlib import Path
@@ -307,3 +308,33 @@ def test_absurd_size_says_the_scale_is_wrong(request, part, scale):
     target = request.getfixturevalue(part) if part == "u_stl" else part
     with pytest.raises(TangleDrakeError, match="scale is probably wrong"):
         load_part(target, mesh_scale=scale)
+
+
+def test_a_part_file_names_its_mesh_scale_and_weighed_mass(tmp_path, u_stl):
+    from tangle_drake.parts.library import part_digest
+
+    computed = load_part(u_stl, mesh_scale=0.001)
+    part_file = tmp_path / "part.json"
+    part_file.write_text(json.dumps({"mesh": str(u_stl), "mesh_scale": 0.001}))
+    same = load_part(part_file)
+    assert same.mass == computed.mass and same.name == computed.name
+    part_file.write_text(json.dumps({"mesh": u_stl.name, "mesh_scale": 0.001,
+                                     "mass_kg": 0.05}))  # relative to the part file
+    (tmp_path / u_stl.name).write_bytes(u_stl.read_bytes())
+    weighed = load_part(part_file)
+    assert weighed.mass == pytest.approx(0.05)
+    assert np.allclose(weighed.inertia, computed.inertia * 0.05 / computed.mass)
+    before = part_digest(part_file)
+    (tmp_path / u_stl.name).write_bytes(u_stl.read_bytes() + b"\n")
+    assert part_digest(part_file) != before  # bound to the mesh's content too
+    with pytest.raises(TangleDrakeError, match="drop --mesh-scale"):
+        load_part(part_file, mesh_scale=0.001)
+    for content, message in (("{", "unreadable"), ('{"mesh_scale": 1}', "needs a"),
+                             ('{"mesh": "a.stl", "colour": 1}', "unknown field 'colour'"),
+                             ('{"mesh": "a.stl", "mass_kg": -1}', "mass_kg"),
+                             ('{"mesh": "a.txt"}', "must be an .obj")):
+        part_file.write_text(content)
+        with pytest.raises(TangleDrakeError, match=message):
+            load_part(part_file)
+    with pytest.raises(TangleDrakeError, match="part file not found"):
+        load_part(tmp_path / "missing.json")

@@ -38,6 +38,7 @@ from tangle_drake.bench.trials import (
 )
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, load_part
+from tangle_drake.parts.library import part_digest
 from tangle_drake.pick.diagram import closed_loop_settings, default_graspability_params
 from tangle_drake.pick.selection import model_part_notice
 from tangle_drake.pile import check_pile
@@ -217,7 +218,7 @@ def identity(config: BenchConfig) -> dict:
         "format": 1, "mode": config.mode, "seed": config.seed, "pile_size": config.pile_size,
         "scenario_sha256": hashlib.sha256(config.scenario_text.encode()).hexdigest(),
         "parts": [{"name": p.name, "part": p.part, "mesh_scale": p.mesh_scale,
-                   "sha256": None if p.part in BUILTIN_PARTS else file_digest(Path(p.part))}
+                   "sha256": part_digest(p.part)}
                   for p in config.parts],
         "methods": {part: [{"name": m.name, "rule": m.rule,
                             "model_sha256": file_digest(m.model_for(part))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import json
 import logging
 import math
 import os
@@ -46,7 +47,8 @@ class PartModel:
 def load_part(
     part: str | os.PathLike[str], mesh_scale: float = 1.0, density: float | None = None
 ) -> PartModel:
-    """A built-in name from BUILTIN_PARTS, or a path to an .obj/.stl/.ply mesh (with its scale).
+    """A built-in name from BUILTIN_PARTS, a path to an .obj/.stl/.ply mesh (with its scale),
+    or a part file (:data:`PART_FILE_SUFFIX`: a mesh with its scale and weighed mass).
 
     `mesh_scale` converts the mesh file's units to metres (0.001 for millimetres); for a
     built-in part it scales the whole part, wire included. `density` defaults to steel.
@@ -65,7 +67,62 @@ def load_part(
     rho = STEEL_DENSITY if density is None else _positive("density", density)
     if str(part) in BUILTIN_PARTS:
         return _load_builtin(str(part), scale, rho)
+    if Path(part).suffix.lower() == PART_FILE_SUFFIX:
+        return _load_part_file(Path(part), scale)
     return _load_mesh_file(Path(part), scale, rho)
+
+
+PART_FILE_SUFFIX = ".json"
+"""A part file: ``{"mesh": PATH, "mesh_scale": S, "mass_kg": M}`` (``mesh`` relative to the
+file; ``mass_kg`` optional), which ``tangle-drake teach`` writes: one place for the mesh, its
+units and a mass the user weighed, which every command then takes as the part."""
+
+
+def read_part_file(path: Path) -> tuple[Path, float, float | None]:
+    """The mesh path, scale and mass (``None``: from the mesh) of a part file."""
+    try:
+        info = json.loads(path.read_text())
+    except FileNotFoundError as error:
+        raise TangleDrakeError(f"part file not found: {path}") from error
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise TangleDrakeError(f"part file {path} is unreadable: {error}") from error
+    if not isinstance(info, dict) or not isinstance(info.get("mesh"), str):
+        raise TangleDrakeError(f"part file {path} needs a \"mesh\" path (and may give "
+                               "\"mesh_scale\" and \"mass_kg\")")
+    unknown = sorted(set(info) - {"mesh", "mesh_scale", "mass_kg"})
+    if unknown:
+        raise TangleDrakeError(f"part file {path}: unknown field {unknown[0]!r}")
+    mesh = Path(info["mesh"])
+    mesh = mesh if mesh.is_absolute() else path.parent / mesh
+    scale = _positive(f"{path}: mesh_scale", info.get("mesh_scale", 1.0))
+    mass = info.get("mass_kg")
+    return mesh, scale, None if mass is None else _positive(f"{path}: mass_kg", mass)
+
+
+def part_digest(part: str | os.PathLike[str]) -> str | None:
+    """SHA-256 of what a user's part is made of (the mesh file; a part file and its mesh), so
+    a dataset or a benchmark is bound to its content; ``None`` for a built-in part."""
+    if str(part) in BUILTIN_PARTS:
+        return None
+    path = Path(part)
+    digest = hashlib.sha256(path.read_bytes())
+    if path.suffix.lower() == PART_FILE_SUFFIX:
+        digest.update(read_part_file(path)[0].read_bytes())
+    return digest.hexdigest()
+
+
+def _load_part_file(path: Path, scale: float) -> PartModel:
+    if scale != 1.0:
+        raise TangleDrakeError(f"{path} is a part file, which sets its own mesh_scale; drop "
+                               "--mesh-scale")
+    mesh, mesh_scale, mass = read_part_file(path)
+    if mesh.suffix.lower() not in mesh_import.MESH_SUFFIXES:
+        raise TangleDrakeError(f"part file {path}: its mesh must be an .obj, .stl or .ply "
+                               f"file, not {mesh}")
+    density = STEEL_DENSITY
+    if mass is not None:  # the solid's volume, from the mesh at steel, sets the density
+        density *= mass / _load_mesh_file(mesh, mesh_scale, STEEL_DENSITY).mass
+    return _load_mesh_file(mesh, mesh_scale, density)
 
 
 def _positive(what: str, value: Any) -> float:

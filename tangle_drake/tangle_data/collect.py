@@ -9,7 +9,6 @@ next anyway), and an interrupted run, run again, redoes exactly the tasks that w
 
 from __future__ import annotations
 
-import hashlib
 import itertools
 import sys
 from concurrent.futures import FIRST_COMPLETED, Future, wait
@@ -20,6 +19,7 @@ from tangle_drake import __version__
 from tangle_drake.bench.trials import scenario_mode
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, PartModel, load_part
+from tangle_drake.parts.library import part_digest
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.pile import check_pile
 from tangle_drake.scenario import Scenario
@@ -60,7 +60,7 @@ def collection_identity(settings: CollectSettings | PickDataSettings, scenario: 
     identity = settings.identity()
     if settings.part not in BUILTIN_PARTS:
         identity["part"] = part.name
-        identity["part_sha256"] = hashlib.sha256(Path(settings.part).read_bytes()).hexdigest()
+        identity["part_sha256"] = part_digest(settings.part)
     camera = camera_model(scenario)
     identity["scenario"] = {
         "bin": asdict(scenario.bin),
