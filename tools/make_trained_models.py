@@ -33,10 +33,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-from tangle_drake.bench.stats import wilson
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts.catalog import BUILTIN_PARTS
 from tangle_drake.pick.selection import TRAINED_DIR
+from tangle_drake.tangle_cnn.card import TEST_HEADER, VALIDATION_HEADER, test_row, validation_row
 from tangle_drake.tangle_cnn.checkpoint import MODEL_KIND, read_checkpoint
 
 CARD = TRAINED_DIR / "README.md"
@@ -69,11 +69,6 @@ def make_model(part: str, samples: int, data: Path, work: Path, workers: int) ->
     TRAINED_DIR.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(checkpoint, TRAINED_DIR / f"{part}.pt")
     print(f"installed {TRAINED_DIR / part}.pt", flush=True)
-
-
-def pct(value: float | None) -> str:
-    """A share as a percentage with one decimal, or n/a."""
-    return "n/a" if value is None else f"{100 * value:.1f}"
 
 
 def test_path(part: str) -> Path:
@@ -114,35 +109,7 @@ def test_rows(part: str) -> tuple[str, dict[str, str]] | None:
     record = json.loads(path.read_text())
     if record.get("weights_sha256") != weights_sha256(model):
         raise TangleDrakeError(f"{path} tested another {model}; run --test-only --parts {part}")
-    result = record["evaluation"]
-    low, high = result["accuracy_interval"]
-    auc = "n/a" if result["auc"] is None else f"{result['auc']:.3f}"
-    share = 100 * result["tangled"] / result["samples"]
-    row = (f"| {part} | {result['samples']} | {share:.1f} | {result['piles']} "
-           f"| {pct(result['accuracy'])} [{100 * low:.0f}, {100 * high:.0f}] "
-           f"| {pct(result['balanced_accuracy'])} | {pct(result['precision'])} "
-           f"| {pct(result['recall'])} | {auc} |")
-    causes = {group["name"]: f"{pct(group['correct'] / group['samples'])} ({group['samples']})"
-              if group["samples"] else "-" for group in result["groups"]}
-    return row, causes
-
-
-def card_row(path: Path) -> str:
-    """One Markdown table row from a shipped checkpoint's own record."""
-    checkpoint = read_checkpoint(path, MODEL_KIND)
-    data, metrics = checkpoint["data"], checkpoint["metrics"]
-
-    auc = metrics.get("val_auc")
-    tangled = 100 * data["tangled"] / data["samples"]
-    n = data["validation_samples"]
-    low, high = wilson(round(metrics["val_accuracy"] * n), n)
-    return (f"| {checkpoint['part']} | {data['samples']} | {tangled:.1f} | {data['piles']} "
-            f"| {data['train_samples']} / {n} "
-            f"({data['validation_piles']} piles) | {metrics['epoch']} of {metrics['epochs_run']} "
-            f"| {metrics['val_loss']:.3f} | {pct(metrics.get('val_accuracy'))} [{100 * low:.0f}, "
-            f"{100 * high:.0f}] | {pct(metrics.get('val_precision'))} | "
-            f"{pct(metrics.get('val_recall'))} | {'n/a' if auc is None else f'{auc:.3f}'} | "
-            f"{path.stat().st_size / 1e6:.1f} MB |")
+    return test_row(part, record["evaluation"])
 
 
 def write_card(parts: list[str]) -> None:
@@ -151,9 +118,9 @@ def write_card(parts: list[str]) -> None:
     shipped = [part for part in parts if (TRAINED_DIR / f"{part}.pt").is_file()]
     if not shipped:
         raise TangleDrakeError(f"no trained models in {TRAINED_DIR} to describe")
-    rows = [card_row(TRAINED_DIR / f"{part}.pt") for part in shipped]
+    rows = [validation_row(TRAINED_DIR / f"{part}.pt") for part in shipped]
     tested = {part: found for part in shipped if (found := test_rows(part)) is not None}
-    CARD.write_text(CARD_TEMPLATE.format(header=CARD_HEADER, rows="\n".join(rows),
+    CARD.write_text(CARD_TEMPLATE.format(header=VALIDATION_HEADER, rows="\n".join(rows),
                                          test=test_section(tested)))
     print(f"wrote {CARD}")
 
@@ -173,22 +140,11 @@ def test_section(tested: dict[str, tuple[str, dict[str, str]]]) -> str:
                       TEST_BY_CAUSE, "", *by_cause])
 
 
-TEST_HEADER = (
-    "| part | test samples | tangled % | piles | accuracy % [95 % interval] "
-    "| balanced accuracy % | precision % (tangled) | recall % (tangled) | ROC-AUC |\n"
-    + "|---" * 9 + "|")
-
 TEST_BY_CAUSE = """\
 Right % (samples) by how the label came about, on the same test piles. The last row holds
 lifts of one part during which another rose 1 cm or more, but less than the 3 cm that makes
 a pick tangled: from above they look like tangles, and the models call many of them so.\
 """
-
-CARD_HEADER = (
-    "| part | samples | tangled % | piles | train / validation samples (balanced) "
-    "| epoch chosen | val loss | val accuracy % [95 % interval] | precision % (tangled) "
-    "| recall % (tangled) "
-    "| ROC-AUC | size |\n" + "|---" * 12 + "|")
 
 CARD_TEMPLATE = """# Shipped tangle models
 

@@ -1,4 +1,5 @@
 """One module per ``tangle-drake`` subcommand; each defines ``register(subparsers)``."""
 
 COMMAND_MODULES: tuple[str, ...] = ("demo", "scene", "diagram", "graspability", "collect",
-                                     "train", "evaluate", "export_onnx", "hardware_sim", "bench")
+                                     "train", "evaluate", "export_onnx", "hardware_sim", "bench",
+                                     "teach")

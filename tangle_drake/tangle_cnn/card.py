@@ -1,0 +1,59 @@
+"""The model card's tables, one place for their columns: a checkpoint's own validation
+figures, and a test on fresh piles (``evaluate``'s figures). The shipped card
+(``tools/make_trained_models.py``) and each ``tangle-drake teach`` run's card use them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from tangle_drake.bench.stats import wilson
+from tangle_drake.tangle_cnn.checkpoint import MODEL_KIND, read_checkpoint
+
+VALIDATION_HEADER = (
+    "| part | samples | tangled % | piles | train / validation samples (balanced) "
+    "| epoch chosen | val loss | val accuracy % [95 % interval] | precision % (tangled) "
+    "| recall % (tangled) "
+    "| ROC-AUC | size |\n" + "|---" * 12 + "|")
+
+TEST_HEADER = (
+    "| part | test samples | tangled % | piles | accuracy % [95 % interval] "
+    "| balanced accuracy % | precision % (tangled) | recall % (tangled) | ROC-AUC |\n"
+    + "|---" * 9 + "|")
+
+
+def pct(value: float | None) -> str:
+    """A share as a percentage with one decimal, or n/a."""
+    return "n/a" if value is None else f"{100 * value:.1f}"
+
+
+def validation_row(path: Path) -> str:
+    """One row of :data:`VALIDATION_HEADER` from a checkpoint's own record."""
+    checkpoint = read_checkpoint(path, MODEL_KIND)
+    data, metrics = checkpoint["data"], checkpoint["metrics"]
+
+    auc = metrics.get("val_auc")
+    tangled = 100 * data["tangled"] / data["samples"]
+    n = data["validation_samples"]
+    low, high = wilson(round(metrics["val_accuracy"] * n), n)
+    return (f"| {checkpoint['part']} | {data['samples']} | {tangled:.1f} | {data['piles']} "
+            f"| {data['train_samples']} / {n} "
+            f"({data['validation_piles']} piles) | {metrics['epoch']} of {metrics['epochs_run']} "
+            f"| {metrics['val_loss']:.3f} | {pct(metrics.get('val_accuracy'))} [{100 * low:.0f}, "
+            f"{100 * high:.0f}] | {pct(metrics.get('val_precision'))} | "
+            f"{pct(metrics.get('val_recall'))} | {'n/a' if auc is None else f'{auc:.3f}'} | "
+            f"{path.stat().st_size / 1e6:.1f} MB |")
+
+
+def test_row(part: str, result: dict) -> tuple[str, dict[str, str]]:
+    """One row of :data:`TEST_HEADER` from an evaluation (``Evaluation.to_dict()``), and its
+    right % (samples) by cause of the label."""
+    low, high = result["accuracy_interval"]
+    auc = "n/a" if result["auc"] is None else f"{result['auc']:.3f}"
+    share = 100 * result["tangled"] / result["samples"]
+    row = (f"| {part} | {result['samples']} | {share:.1f} | {result['piles']} "
+           f"| {pct(result['accuracy'])} [{100 * low:.0f}, {100 * high:.0f}] "
+           f"| {pct(result['balanced_accuracy'])} | {pct(result['precision'])} "
+           f"| {pct(result['recall'])} | {auc} |")
+    causes = {group["name"]: f"{pct(group['correct'] / group['samples'])} ({group['samples']})"
+              if group["samples"] else "-" for group in result["groups"]}
+    return row, causes

@@ -1,0 +1,246 @@
+"""``tangle-drake teach``: a user's mesh to a trained, tested, benchmarked model, resumably.
+
+Stages, each with a time budget (:data:`BUDGET_MIN`, 30 minutes with two workers in all):
+
+1. ``check``: the mesh check (:mod:`.check`): ``check.txt``/``.json``, ``part.png``,
+   ``pile.png``, and ``part.json``, the part file every later stage names as the part (the
+   mesh, its scale, a ``--mass`` the user weighed);
+2. ``labels``: the auto-lift's labels (``collect``) into ``data/``;
+3. ``train``: the tangle CNN into ``model.pt`` (and ``model.onnx`` where ONNX is installed);
+4. ``test``: fresh piles of another seed into ``test/`` and the model's figures on them;
+5. ``bench``: graspability alone against the model on the same piles, into ``bench/``;
+6. ``card``: ``card.md``, the model card: the check, the data, the figures, the benchmark.
+
+``teach.json`` records the run's settings and the finished stages. The same command again
+skips what is finished and resumes the stage that was interrupted where it stopped (each
+stage is itself resumable: shards, training state, benchmark trials); other settings for
+the same directory are refused. :data:`AFTER_STAGE` is called after each finished stage (a
+test interrupts a run there).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import trimesh
+
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.parts import load_part
+from tangle_drake.teach.check import PartCheck, check_part, scenario_of, settle_verdict
+
+STAGES = ("check", "labels", "train", "test", "bench", "card")
+BUDGET_MIN = {"check": 1.0, "labels": 15.0, "train": 6.0, "test": 3.0, "bench": 4.0,
+              "card": 1.0}
+"""Each stage's share of the 30 minutes a new part may take on the 2-core machine."""
+STATE_FILE = "teach.json"
+AFTER_STAGE: Callable[[str], None] | None = None
+"""Called with each stage's name once it is finished and recorded."""
+
+
+@dataclass(frozen=True)
+class TeachSettings:
+    """What ``teach`` was asked for (the run's identity, with the mesh's content)."""
+
+    mesh: str
+    mesh_scale: float = 1.0
+    mass_kg: float | None = None
+    samples: int = 5100
+    test_samples: int = 500
+    bench_trials: int = 20
+    epochs: int = 40
+    parts_per_pile: int | None = None
+    """``None``: the collection's default for the part's size."""
+    validation_fraction: float = 0.1
+    seed: int = 0
+
+    @staticmethod
+    def quick(mesh: str, mesh_scale: float = 1.0, mass_kg: float | None = None,
+              seed: int = 0) -> TeachSettings:
+        """Every stage, as small as still says something (CI's end-to-end check): enough
+        labels, in the part's full piles, that both classes reach the training and
+        validation piles."""
+        return TeachSettings(mesh, mesh_scale, mass_kg, samples=60, test_samples=20,
+                             bench_trials=1, epochs=2, validation_fraction=0.3, seed=seed)
+
+
+class Teacher:
+    """Runs the stages of one ``teach`` directory."""
+
+    def __init__(self, settings: TeachSettings, out: Path, workers: int | None = None,
+                 ray: str | None = None, say: Callable[[str], None] = print) -> None:
+        self.settings = settings
+        self.out = Path(out)
+        self.workers = workers
+        self.ray = ray
+        self.say = say
+        self.done: list[str] = []
+        self._open()
+
+    @property
+    def part_file(self) -> Path:
+        return self.out / "part.json"
+
+    @property
+    def model(self) -> Path:
+        return self.out / "model.pt"
+
+    def _identity(self) -> dict:
+        mesh = Path(self.settings.mesh)
+        if not mesh.is_file():
+            raise TangleDrakeError(f"mesh file not found: {mesh}")
+        return {**asdict(self.settings), "mesh": str(mesh.resolve()),
+                "mesh_sha256": hashlib.sha256(mesh.read_bytes()).hexdigest()}
+
+    def _open(self) -> None:
+        identity = self._identity()
+        path = self.out / STATE_FILE
+        if path.exists():
+            state = json.loads(path.read_text())
+            if state.get("identity") != identity:
+                raise TangleDrakeError(f"{self.out} holds a teach run of other settings or "
+                                       "another mesh; run it with the same arguments to "
+                                       "resume it, or choose another --out")
+            self.done = list(state.get("done", []))
+        elif self.out.exists() and any(self.out.iterdir()):
+            raise TangleDrakeError(f"--out {self.out} is not empty and holds no teach run")
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.identity = identity
+        self._save()
+
+    def _save(self) -> None:
+        tmp = self.out / (STATE_FILE + ".tmp")
+        tmp.write_text(json.dumps({"identity": self.identity, "done": self.done}, indent=1))
+        tmp.replace(self.out / STATE_FILE)
+
+    def run(self) -> PartCheck:
+        """Every stage not yet finished, in order; the check's result (refused: stops)."""
+        check = None
+        for number, stage in enumerate(STAGES, 1):
+            if stage in self.done:
+                self.say(f"[{number}/{len(STAGES)}] {stage}: done before")
+                if stage == "check":
+                    check = PartCheck(**json.loads((self.out / "check.json").read_text()))
+                continue
+            left = sum(BUDGET_MIN[s] for s in STAGES[number - 1:])
+            self.say(f"[{number}/{len(STAGES)}] {stage}: budget {BUDGET_MIN[stage]:g} min "
+                     f"(about {left:g} min left in all)")
+            start = time.perf_counter()
+            result = getattr(self, f"_{stage}")()
+            if stage == "check":
+                check = result
+                if not check.accepted:
+                    return check
+            self.say(f"[{number}/{len(STAGES)}] {stage}: finished in "
+                     f"{(time.perf_counter() - start) / 60:.1f} min")
+            self.done.append(stage)
+            self._save()
+            if AFTER_STAGE is not None:
+                AFTER_STAGE(stage)
+        return check
+
+    # -- the stages ---------------------------------------------------------------------------
+
+    def _check(self) -> PartCheck:
+        from tangle_drake.scenario_files import resolve_scenario
+
+        s = self.settings
+        scenario = resolve_scenario("floating_gripper.yaml")
+        check = check_part(Path(s.mesh), s.mesh_scale, scenario, s.mass_kg)
+        if check.accepted:
+            check = self._pile(check, scenario)
+        check.write(self.out / "check.json")
+        (self.out / "check.txt").write_text("\n".join(check.lines()) + "\n")
+        for line in check.lines():
+            self.say(f"  {line}")
+        return check
+
+    def _pile(self, check: PartCheck, scenario) -> PartCheck:
+        """Write the part file and the pictures; ``check`` with how a settled pile went."""
+        from tangle_drake.scene import make_scene
+        from tangle_drake.teach.pictures import write_pictures
+
+        s = self.settings
+        self.part_file.write_text(json.dumps({"mesh": str(Path(s.mesh).resolve()),
+                                              "mesh_scale": s.mesh_scale,
+                                              "mass_kg": s.mass_kg}, indent=1) + "\n")
+        part = load_part(self.part_file)
+        entry = part.sdf_path.parent
+        pieces = [trimesh.load_mesh(p, process=False)
+                  for p in sorted(entry.glob("collision_*.obj"))]
+        pile = scenario_of(scenario, self.part_file)
+        pile.view_cameras = []
+        scene = make_scene(pile, seed=s.seed)
+        for path in write_pictures(self.out, trimesh.load_mesh(part.visual_mesh_path,
+                                                                process=False), pieces,
+                                   scene.depth):
+            self.say(f"  wrote {path}")
+        return settle_verdict(check, scene.report)
+
+    def _collect(self, out: Path, samples: int, seed: int) -> None:
+        from tangle_drake.tangle_data.collect import collect, default_scenario_text
+        from tangle_drake.tangle_data.defaults import default_parts_per_pile
+        from tangle_drake.tangle_data.settings import CollectSettings
+        from tangle_drake.tangle_data.simulator import data_scenario
+
+        settings = CollectSettings(part=str(self.part_file), seed=seed)
+        count = self.settings.parts_per_pile
+        if count is None:
+            part = load_part(self.part_file)
+            count = default_parts_per_pile(part.name, part, data_scenario(
+                default_scenario_text(), settings).bin)
+        result = collect(replace(settings, parts_per_pile=count), out, samples,
+                         workers=self.workers, ray_address=self.ray)
+        if result.interrupted:
+            raise KeyboardInterrupt
+        self.say(f"  {out}: {result.counts['samples']} samples, "
+                 f"{result.counts['tangled']} tangled")
+
+    def _labels(self) -> None:
+        self._collect(self.out / "data", self.settings.samples, self.settings.seed)
+
+    def _train(self) -> None:
+        from tangle_drake.tangle_cnn.train import TrainSettings, train
+
+        s = self.settings
+        train(self.out / "data", self.model,
+              TrainSettings(epochs=s.epochs, seed=s.seed,
+                            validation_fraction=s.validation_fraction),
+              device="cpu", log=lambda line: self.say(f"  {line}"))
+        from tangle_drake.tangle_cnn.model import load_tangle_model
+        from tangle_drake.tangle_cnn.onnx_export import export_onnx
+
+        try:
+            export_onnx(load_tangle_model(self.model), self.out / "model.onnx")
+        except TangleDrakeError as error:  # the onnx extra is not installed
+            self.say(f"  no ONNX file: {error}")
+
+    def _test(self) -> None:
+        from tangle_drake.tangle_cnn.evaluate import evaluate_model
+        from tangle_drake.tangle_cnn.model import load_tangle_model
+
+        self._collect(self.out / "test", self.settings.test_samples, self.settings.seed + 1)
+        result = evaluate_model(load_tangle_model(self.model), self.out / "test")
+        (self.out / "test.json").write_text(json.dumps(result.to_dict(), indent=1) + "\n")
+        self.say(f"  on {result.samples} fresh samples: accuracy {100 * result.accuracy:.1f} "
+                 f"%, ROC-AUC {'n/a' if result.auc is None else f'{result.auc:.3f}'}")
+
+    def _bench(self) -> None:
+        from tangle_drake.bench.runner import BenchOptions, run_bench
+
+        options = BenchOptions(methods=["graspability", f"model:{self.model}"],
+                               parts=[str(self.part_file)], trials=self.settings.bench_trials,
+                               workers=self.workers, ray=self.ray, out=self.out / "bench",
+                               seed=self.settings.seed,
+                               command=f"tangle-drake teach {self.settings.mesh}")
+        run_bench(options, say=lambda line: self.say(f"  {line}"))
+
+    def _card(self) -> None:
+        from tangle_drake.teach.card import write_card
+
+        path = write_card(self.out)
+        self.say(f"  wrote {path}")

@@ -1,0 +1,135 @@
+"""``tangle-drake teach``: the mesh check refuses what is not a pickable part, with the reason,
+and accepts the meshes a user brings; a small run goes through every stage, and one interrupted
+at each stage boundary resumes there without redoing finished work."""
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from cli_run import run_command
+
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.parts import catalog, wire
+from tangle_drake.pile import PileReport
+from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.teach import pipeline
+from tangle_drake.teach.check import check_part, settle_verdict
+from tangle_drake.teach.pipeline import STAGES, Teacher, TeachSettings
+
+SCENARIO = resolve_scenario("floating_gripper.yaml")
+
+
+def _hook_mm() -> trimesh.Trimesh:
+    mesh = wire.tube_mesh(catalog.builtin_spec("u_hook"))
+    mesh.apply_scale(1000.0)
+    return mesh
+
+
+@pytest.fixture(scope="module")
+def meshes(tmp_path_factory) -> Path:
+    """Meshes a user might bring, good and bad."""
+    out = tmp_path_factory.mktemp("meshes")
+    hook = _hook_mm()
+    hook.export(out / "hook_mm.stl")
+    trimesh.creation.torus(major_radius=0.02, minor_radius=0.0025).export(out / "ring_m.ply")
+    trimesh.creation.box(extents=(50.0, 20.0, 3.0)).export(out / "bracket_mm.obj")
+    hook.update_faces(np.arange(len(hook.faces)) >= wire.TUBE_SIDES * 6)  # an end face gone
+    hook.remove_unreferenced_vertices()
+    hook.export(out / "open_hook_mm.stl")
+    trimesh.Trimesh([[0, 0, 0], [40, 0, 0], [40, 30, 0], [0, 30, 0]],
+                    [[0, 1, 2], [0, 2, 3]]).export(out / "sheet_mm.stl")
+    (out / "empty.obj").write_text("# nothing here\n")
+    return out
+
+
+@pytest.mark.parametrize(("name", "scale"), [("hook_mm.stl", 0.001), ("ring_m.ply", 1.0),
+                                             ("bracket_mm.obj", 0.001),
+                                             ("open_hook_mm.stl", 0.001)])
+def test_the_check_accepts_the_parts_a_user_brings(meshes, name, scale):
+    check = check_part(meshes / name, scale, SCENARIO)
+    assert check.accepted, check.refusal
+    assert max(check.size_m) == pytest.approx({"hook_mm.stl": 0.070, "ring_m.ply": 0.045,
+                                               "bracket_mm.obj": 0.050,
+                                               "open_hook_mm.stl": 0.070}[name], abs=1e-3)
+    assert check.mass_kg > 0 and check.pieces >= 1 and check.pieces_volume_ratio > 0.9
+    assert check.watertight == (name != "open_hook_mm.stl")
+    assert check.holes_capped == (name == "open_hook_mm.stl")
+    assert any("mm" in line for line in check.lines())
+
+
+@pytest.mark.parametrize(("name", "scale", "reason"), [
+    ("sheet_mm.stl", 0.001, "encloses no volume"),
+    ("empty.obj", 1.0, "no triangles"),
+    ("hook_mm.stl", 1.0, "the scale is probably wrong"),  # millimetres read as metres
+    ("hook_mm.stl", 0.0001, "smaller than a finger is wide"),
+    ("ring_m.ply", 10.0, "too large for the bin"),
+    ("missing.stl", 1.0, "not found"),
+])
+def test_the_check_refuses_what_is_not_a_pickable_part_with_the_reason(meshes, name, scale,
+                                                                      reason):
+    check = check_part(meshes / name, scale, SCENARIO)
+    assert not check.accepted and reason in check.refusal
+    assert check.lines()[-1].startswith(f"mesh {meshes / name}: refused") or \
+        check.lines()[-1].startswith("refused")
+
+
+def test_a_weighed_mass_overrides_the_meshs_and_a_pile_the_physics_cannot_make_is_refused(
+        meshes):
+    check = check_part(meshes / "hook_mm.stl", 0.001, SCENARIO, mass_kg=0.02)
+    assert check.mass_kg == 0.02 and check.mass_from == "weighed"
+    good = PileReport(seed=0, num_parts=15, settle_time=1.0, max_penetration=0.0002,
+                      settled=True)
+    assert settle_verdict(check, good).accepted
+    bad = PileReport(seed=0, num_parts=15, settle_time=16.0, parked=[f"p{i}" for i in range(9)],
+                     max_penetration=0.011, settled=False)
+    refused = settle_verdict(check, bad)
+    assert "cannot pile this part: 9 of 15" in refused.refusal
+    assert "9 parked" in refused.pile
+
+
+def test_a_small_run_teaches_every_stage_and_resumes_at_each_boundary(meshes, tmp_path,
+                                                                      monkeypatch):
+    settings = TeachSettings(str(meshes / "hook_mm.stl"), 0.001, samples=30, test_samples=6,
+                             bench_trials=1, epochs=1, parts_per_pile=10,
+                             validation_fraction=0.3)
+    out = tmp_path / "hook"
+    finished: list[str] = []
+
+    def stop_after_each(stage: str) -> None:
+        finished.append(stage)
+        raise KeyboardInterrupt  # as Ctrl-C would, between two stages
+
+    monkeypatch.setattr(pipeline, "AFTER_STAGE", stop_after_each)
+    said: list[str] = []
+    labelled = None
+    for _ in STAGES:
+        with pytest.raises(KeyboardInterrupt):
+            Teacher(settings, out, workers=1, say=said.append).run()
+        if finished[-1] == "labels":
+            labelled = _mtimes(out / "data")
+    assert finished == list(STAGES)  # each stage ran once, in order
+    assert _mtimes(out / "data") == labelled  # the labels were not collected again
+    assert sum(line.endswith(": done before") for line in said) == sum(range(len(STAGES)))
+    for name in ("part.json", "check.json", "part.png", "pile.png", "model.pt", "test.json",
+                 "card.md", "bench/report.md"):
+        assert (out / name).is_file(), name
+    assert json.loads((out / "teach.json").read_text())["done"] == list(STAGES)
+    card = (out / "card.md").read_text()
+    assert "## Test on fresh piles" in card and "| graspability |" in card
+    with pytest.raises(TangleDrakeError, match="other settings"):
+        Teacher(replace(settings, samples=31), out, say=said.append)
+
+
+def _mtimes(directory: Path) -> dict[Path, int]:
+    return {p: p.stat().st_mtime_ns for p in directory.glob("shard_*")}
+
+
+def test_the_command_refuses_a_bad_mesh_with_its_reason(meshes, tmp_path, capsys):
+    assert run_command("teach", str(meshes / "sheet_mm.stl"), "--mesh-scale", "0.001",
+                       "--out", str(tmp_path / "sheet")) == 2
+    printed = capsys.readouterr().out
+    assert "refused: " in printed and "encloses no volume" in printed
+    assert "encloses no volume" in (tmp_path / "sheet" / "check.txt").read_text()
