@@ -39,12 +39,12 @@ class Scripted(LeafSystem):
             {self.time_ticket()})
 
 
-def run(force, speed=lambda t: 0.0, phase=None, until=2.0):
+def run(force, speed=lambda t: 0.0, phase=None, until=2.0, settings=SETTINGS):
     """The estimate at ``until``; tare over [0, 0.5), weigh from 0.5 s on by default."""
     phase = phase or (lambda t: PayloadPhase.TARE if t < 0.5 else PayloadPhase.WEIGH)
     builder = DiagramBuilder()
     source = builder.AddSystem(Scripted(force, speed, phase))
-    estimator = builder.AddSystem(PayloadEstimator(SETTINGS, 8))
+    estimator = builder.AddSystem(PayloadEstimator(settings, 8))
     for port in ("force_torque", "carrier_state", "request"):
         builder.Connect(source.GetOutputPort(port), estimator.GetInputPort(port))
     simulator = Simulator(builder.Build())
@@ -97,6 +97,27 @@ def test_half_way_between_two_counts_is_low_confidence():
     assert estimate.confidence == pytest.approx(0.5, abs=0.01) and not estimate.trusted
     sure = estimate_from(np.full(20, 2.0 * PART * G), 0.0, SETTINGS)
     assert sure.count == 2 and sure.confidence > 0.99 and sure.trusted
+
+
+def test_a_noisy_sensor_weighs_longer_and_a_doubtful_count_is_not_trusted():
+    noisy = PayloadSettings(part_mass=PART, sensor_noise=0.5)  # five times the default
+    doubtful = estimate_from(np.full(20, 1.1 * PART * G), 0.0, noisy)
+    assert doubtful.count == 1 and doubtful.confidence < noisy.min_confidence
+    assert not doubtful.trusted  # near a whole number, but likely another one
+    rng = np.random.default_rng(5)
+    noise = 0.5 * rng.standard_normal(600)
+
+    def force(t: float) -> float:
+        return GRIPPER + (PART * G if t >= 1.2 else 0.0) + noise[int(t / 0.01)]
+
+    phase = lambda t: PayloadPhase.TARE if t < 1.2 else PayloadPhase.WEIGH  # noqa: E731
+    quiet = run(lambda t: GRIPPER + PART * G * (t >= 1.2) + 0.1 * noise[int(t / 0.01)] / 0.5,
+                phase=phase, until=3.0)
+    estimate = run(force, phase=phase, until=3.0, settings=noisy)
+    assert quiet.samples == 20  # the default sensor: the default window
+    assert estimate.samples > 3 * quiet.samples  # the noisy one: until the count is sure
+    assert estimate.std < 0.3  # 0.49 parts over the default window
+    assert not estimate.trusted or estimate.count == 1  # a count acted on is never wrong
 
 
 def test_nothing_is_weighed_before_a_tare():

@@ -9,7 +9,11 @@ The estimate is the mean vertical support force over the window minus the tare, 
 weights. It reads no ``sim.`` port: on hardware it is the same system.
 
 Confidence: the estimate's distance to the nearest whole number of parts and its standard
-error, and a load that swings (samples spread far beyond the sensor's noise) is flagged.
+error, and a load that swings (samples spread far beyond the sensor's noise) is flagged. A
+count is acted on only when it is near a whole number, the load is still, and it is almost
+surely right (``min_confidence``); so that a noisier sensor still gets there, a tare and a
+weighing go on past ``window`` until the count's standard error is below ``target_std`` (or
+``max_window``): at the default sensor noise they end at ``window``.
 """
 
 from __future__ import annotations
@@ -67,14 +71,28 @@ class PayloadSettings:
     """A load whose samples spread more than this many times the sensor's noise swings."""
     max_fraction: float = 0.25
     """An estimate farther than this from a whole number of parts is not trusted."""
+    min_confidence: float = 0.99
+    """A count less likely than this to be right is not trusted (at five times the default
+    sensor noise, counts near a whole number were often the wrong one: several parts
+    delivered as one)."""
+    target_std: float = 0.12
+    """A weighing goes on past ``window`` until the count's standard error is below this,
+    parts (a tare, until its share is below this over the square root of two)..."""
+    max_window: float = 1.0
+    """...or for at most this long, s (within the planner's waits for a tare and a
+    weighing)."""
 
     def __post_init__(self) -> None:
         for name in ("part_mass", "sensor_noise", "settle_time", "window", "period",
-                     "stopped_speed", "swing_factor"):
+                     "stopped_speed", "swing_factor", "target_std"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"PayloadSettings.{name} must be positive")
         if not 0 < self.max_fraction <= 0.5:
             raise ValueError("PayloadSettings.max_fraction must be in (0, 0.5]")
+        if not 0.5 <= self.min_confidence < 1:
+            raise ValueError("PayloadSettings.min_confidence must be in [0.5, 1)")
+        if not self.max_window >= self.window:
+            raise ValueError("PayloadSettings.max_window must be at least window")
 
 
 @dataclass(frozen=True)
@@ -95,7 +113,7 @@ class PayloadEstimate:
     swinging: bool = False
     """The samples spread far beyond the sensor's noise: the load was still moving."""
     trusted: bool = False
-    """Near a whole number, not swinging: the count may be acted on."""
+    """Near a whole number, not swinging, almost surely right: the count may be acted on."""
     samples: int = 0
     support: float = math.nan
     """The weighing's mean vertical support force, N (the put-back's force limit is below
@@ -111,6 +129,7 @@ class _State:
     request: PayloadRequest = PayloadRequest()
     stopped_since: float | None = None
     tare: float | None = None
+    tare_samples: int = 0
     tared: bool = False
     window: tuple[float, ...] = ()
     estimate: PayloadEstimate = field(default_factory=PayloadEstimate)
@@ -132,9 +151,15 @@ def estimate_from(samples: np.ndarray, tare: float, settings: PayloadSettings,
     confidence = 0.5 * (math.erf((0.5 - fraction) / (std * math.sqrt(2)))
                         + math.erf((0.5 + fraction) / (std * math.sqrt(2))))
     swinging = spread > settings.swing_factor * settings.sensor_noise
-    return PayloadEstimate(True, parts, count, std, confidence, swinging,
-                           fraction <= settings.max_fraction and not swinging, len(samples),
-                           float(np.mean(samples)), weight)
+    trusted = (fraction <= settings.max_fraction and not swinging
+               and confidence >= settings.min_confidence)
+    return PayloadEstimate(True, parts, count, std, confidence, swinging, trusted,
+                           len(samples), float(np.mean(samples)), weight)
+
+
+def tare_std(samples: int, settings: PayloadSettings) -> float:
+    """The share of a tare of ``samples`` samples in a count's standard error, parts."""
+    return settings.sensor_noise / (settings.part_mass * G) / math.sqrt(max(samples, 1))
 
 
 class PayloadEstimator(LeafSystem):
@@ -149,6 +174,11 @@ class PayloadEstimator(LeafSystem):
         super().__init__()
         self._settings = settings
         self._samples = max(1, round(settings.window / settings.period))
+        self._max_samples = max(self._samples, round(settings.max_window / settings.period))
+        # A tare is a rolling window: of ``window`` where that is precise enough (the default
+        # sensor), else as long as the carrier stands still, up to ``max_window``.
+        self._tare_samples = self._samples if tare_std(self._samples, settings) <= \
+            settings.target_std / math.sqrt(2) else self._max_samples
         self._force = self.DeclareVectorInputPort("force_torque", 6)
         self._carrier = self.DeclareVectorInputPort("carrier_state", carrier_state_size)
         self._request = self.DeclareAbstractInputPort("request",
@@ -196,11 +226,17 @@ class PayloadEstimator(LeafSystem):
         if t - since < self._settings.settle_time - 1e-9:
             return s
         fz = float(self._force.Eval(context)[_FZ])
-        window = (*s.window, fz)[-self._samples:]
+        tare = phase is PayloadPhase.TARE
+        window = (*s.window, fz)[-(self._tare_samples if tare else self._max_samples):]
         s = replace(s, window=window)
-        if phase is PayloadPhase.TARE:
-            return replace(s, tare=float(np.mean(window)), tared=len(window) >= self._samples)
-        if len(window) >= self._samples and s.tare is not None and not s.estimate.ready:
-            return replace(s, estimate=estimate_from(
-                np.array(window), s.tare, self._settings, self._samples))
+        n, settings = len(window), self._settings
+        if tare:
+            precise = tare_std(n, settings) <= settings.target_std / math.sqrt(2)
+            return replace(s, tare=float(np.mean(window)), tare_samples=n,
+                           tared=n >= self._samples and (precise or n >= self._max_samples))
+        if n >= self._samples and s.tare is not None and not s.estimate.ready:
+            estimate = estimate_from(np.array(window), s.tare, settings, s.tare_samples)
+            if estimate.std <= settings.target_std or estimate.swinging or \
+                    n >= self._max_samples:
+                return replace(s, estimate=estimate)
         return s
