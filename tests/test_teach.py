@@ -78,8 +78,13 @@ def test_the_check_refuses_what_is_not_a_pickable_part_with_the_reason(meshes, n
 
 def test_a_weighed_mass_overrides_the_meshs_and_a_pile_the_physics_cannot_make_is_refused(
         meshes):
-    check = check_part(meshes / "hook_mm.stl", 0.001, SCENARIO, mass_kg=0.02)
-    assert check.mass_kg == 0.02 and check.mass_from == "weighed"
+    part_file = meshes / "hook.json"
+    part_file.write_text(json.dumps({"mesh": "hook_mm.stl", "mesh_scale": 0.001,
+                                     "mass_kg": 0.02}))
+    check = check_part(part_file, 1.0, SCENARIO)
+    assert check.mass_kg == pytest.approx(0.02) and check.mass_from == "weighed"
+    assert check.pieces_volume_ratio == pytest.approx(
+        check_part(meshes / "hook_mm.stl", 0.001, SCENARIO).pieces_volume_ratio)
     good = PileReport(seed=0, num_parts=15, settle_time=1.0, max_penetration=0.0002,
                       settled=True)
     assert settle_verdict(check, good).accepted

@@ -83,36 +83,39 @@ class PartCheck:
         path.write_text(json.dumps(asdict(self), indent=1) + "\n")
 
 
-def check_part(mesh: Path, mesh_scale: float, scenario: Scenario, mass_kg: float | None = None,
+def check_part(mesh: Path, mesh_scale: float, scenario: Scenario,
                gripper: GripperSpec = DEFAULT_GRIPPER) -> PartCheck:
-    """Check ``mesh`` (a mesh file or a part file) at ``mesh_scale`` for ``scenario``'s bin and
-    the ``gripper``; ``mass_kg`` is a mass the user weighed."""
+    """Check ``mesh`` at ``mesh_scale`` for ``scenario``'s bin and the ``gripper``; a part file
+    (its own scale; ``mesh_scale`` 1) brings the mass the user weighed."""
     mesh = Path(mesh)
-    source, scale = mesh, mesh_scale
-    if mesh.suffix.lower() == PART_FILE_SUFFIX:
-        source, scale, weighed = read_part_file(mesh)
-        mass_kg = mass_kg if mass_kg is not None else weighed
-    if source.suffix.lower() not in MESH_SUFFIXES:
-        return PartCheck(str(mesh), refusal=f"not a mesh file: {source} (give an .obj, .stl "
-                                            "or .ply)")
+    source, weighed = mesh, None
     try:
-        part = load_part(source, mesh_scale=scale)
+        if mesh.suffix.lower() == PART_FILE_SUFFIX:
+            source, _, weighed = read_part_file(mesh)
+        if source.suffix.lower() not in MESH_SUFFIXES:
+            return PartCheck(str(mesh), refusal=f"not a mesh file: {source} (give an .obj, "
+                                                ".stl or .ply)")
+        part = load_part(mesh, mesh_scale=mesh_scale)  # a part file: at the weighed mass
+        solid = load_part(source, mesh_scale=part_scale(mesh, mesh_scale))  # at steel
     except TangleDrakeError as error:
         return PartCheck(str(mesh), refusal=str(error))
-    entry = part.sdf_path.parent
+    entry = solid.sdf_path.parent
     meta = json.loads((entry / cache.META_FILE).read_text())
     surface = trimesh.load_mesh(part.visual_mesh_path, process=False)
     size = tuple(float(x) for x in surface.extents)
     pieces = [trimesh.load_mesh(p, process=False) for p in sorted(entry.glob("collision_*.obj"))]
-    volume = part.mass / STEEL_DENSITY  # what the mass was integrated over, at steel
+    volume = solid.mass / STEEL_DENSITY  # what the mass was integrated over
     ratio = sum(float(p.volume) for p in pieces) / volume if pieces else 1.0
-    mass, inertia, mass_from = part.mass, part.inertia, meta["mass_from"]
-    if mass_kg is not None:
-        inertia, mass, mass_from = inertia * mass_kg / mass, mass_kg, "weighed"
-    check = PartCheck(str(mesh), part.name, size, float(mass), mass_from,
-                      np.asarray(inertia).tolist(), _was_watertight(source),
+    check = PartCheck(str(mesh), part.name, size, float(part.mass),
+                      "weighed" if weighed is not None else meta["mass_from"],
+                      np.asarray(part.inertia).tolist(), _was_watertight(source),
                       int(meta["holes_capped"]), len(pieces), float(ratio))
-    return _refusal(check, source, scale, scenario, gripper)
+    return _refusal(check, mesh, mesh_scale, scenario, gripper)
+
+
+def part_scale(mesh: Path, mesh_scale: float) -> float:
+    """The mesh's scale: a part file's own, else ``mesh_scale``."""
+    return read_part_file(mesh)[1] if mesh.suffix.lower() == PART_FILE_SUFFIX else mesh_scale
 
 
 def _was_watertight(source: Path) -> bool:

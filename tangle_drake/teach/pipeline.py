@@ -150,7 +150,10 @@ class Teacher:
 
         s = self.settings
         scenario = resolve_scenario("floating_gripper.yaml")
-        check = check_part(Path(s.mesh), s.mesh_scale, scenario, s.mass_kg)
+        self.part_file.write_text(json.dumps({"mesh": str(Path(s.mesh).resolve()),
+                                              "mesh_scale": s.mesh_scale,
+                                              "mass_kg": s.mass_kg}, indent=1) + "\n")
+        check = check_part(self.part_file, 1.0, scenario)
         if check.accepted:
             check = self._pile(check, scenario)
         check.write(self.out / "check.json")
@@ -165,9 +168,6 @@ class Teacher:
         from tangle_drake.teach.pictures import write_pictures
 
         s = self.settings
-        self.part_file.write_text(json.dumps({"mesh": str(Path(s.mesh).resolve()),
-                                              "mesh_scale": s.mesh_scale,
-                                              "mass_kg": s.mass_kg}, indent=1) + "\n")
         part = load_part(self.part_file)
         entry = part.sdf_path.parent
         pieces = [trimesh.load_mesh(p, process=False)
