@@ -13,6 +13,7 @@ from tangle_drake.crops import DEFAULT_CROP
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.parts.catalog import BUILTIN_PARTS
 from tangle_drake.pick.selection import TRAINED_DIR, resolve_tangle_choice, trained_model_path
+from tangle_drake.tangle_cnn.card import validation_row
 from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
 from tangle_drake.tangle_cnn.target_mask import TargetMask
@@ -47,7 +48,7 @@ def test_the_model_card_says_what_the_shipped_files_hold():
     spec.loader.exec_module(tool)
     card = (TRAINED_DIR / "README.md").read_text()
     for part in BUILTIN_PARTS:
-        assert tool.card_row(trained_model_path(part)) in card, part
+        assert validation_row(trained_model_path(part)) in card, part
         tested = tool.test_rows(part)  # raises if the figures belong to another model file
         assert tested is not None, f"{part}: the shipped model was not tested"
         assert tested[0] in card, part
