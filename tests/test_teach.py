@@ -13,6 +13,7 @@ from cli_run import run_command
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import catalog, wire
+from tangle_drake.pick.selection import model_part_notice
 from tangle_drake.pile import PileReport
 from tangle_drake.scenario_files import resolve_scenario
 from tangle_drake.teach import pipeline
@@ -124,6 +125,8 @@ def test_a_small_run_teaches_every_stage_and_resumes_at_each_boundary(meshes, tm
     assert json.loads((out / "teach.json").read_text())["done"] == list(STAGES)
     card = (out / "card.md").read_text()
     assert "## Test on fresh piles" in card and "| graspability |" in card
+    assert model_part_notice(out / "model.pt", str(out / "part.json")) is None  # its part
+    assert "trained on part 'hook_mm'" in model_part_notice(out / "model.pt", "u_hook")
     with pytest.raises(TangleDrakeError, match="other settings"):
         Teacher(replace(settings, samples=31), out, say=said.append)
 

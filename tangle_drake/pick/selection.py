@@ -16,6 +16,8 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem
 
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.parts import load_part
+from tangle_drake.parts.library import PART_FILE_SUFFIX
 from tangle_drake.tangle_cnn.objectives import (
     DEFAULT_OBJECTIVE,
     DEFAULT_RULES,
@@ -91,11 +93,13 @@ def default_rule(model: Path) -> str:
 
 def model_part_notice(model: Path, part: str) -> str | None:
     """A warning when the checkpoint at ``model`` was trained on another part than ``part``
-    (a built-in name or a mesh's stem): it still runs, but its P(not tangled) means little."""
+    (a built-in name, a mesh file or a part file): it still runs, but its probability means
+    little."""
     from tangle_drake.tangle_cnn.checkpoint import read_checkpoint  # imports torch
 
     trained_on = read_checkpoint(Path(model)).get("part")
-    name = Path(part).stem
+    name = load_part(part).name if Path(part).suffix.lower() == PART_FILE_SUFFIX else \
+        Path(part).stem  # a part file names its mesh's part
     if trained_on is None or str(trained_on) == name:
         return None
     return (f"warning: the tangle model {model} was trained on part {trained_on!r}, and the "
