@@ -67,6 +67,17 @@ OPTIONAL_FIELDS: dict[str, np.dtype] = {
 }
 
 
+def rows_to_arrays(rows: dict[str, list], shapes: dict[str, tuple[int, ...]]
+                   ) -> dict[str, np.ndarray]:
+    """A task's rows (a list of values per field) as shard arrays of the fields' dtypes;
+    ``shapes`` gives each non-scalar field's row shape, so a task without samples still
+    writes arrays of the right shape."""
+    dtypes = SAMPLE_FIELDS | OPTIONAL_FIELDS
+    return {name: np.asarray(values, dtype=dtypes[name]) if values else
+            np.zeros((0, *shapes.get(name, ())), dtype=dtypes[name])
+            for name, values in rows.items()}
+
+
 def shard_name(task: int) -> str:
     return f"shard_{task:07d}.npz"
 

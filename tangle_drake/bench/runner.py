@@ -187,14 +187,14 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
 def overlap_warnings(config: BenchConfig, trials: int) -> list[str]:
     """A warning for each model that was trained on piles this run tests on (its checkpoint
     lists its piles' seeds; older checkpoints do not, and are not checked)."""
-    from tangle_drake.tangle_cnn.checkpoint import read_checkpoint  # imports torch
-
     warnings = []
     for spec in config.parts:
         tested = {pile_seed(config.seed, spec.name, t) for t in range(trials)}
         for method in config.methods[spec.name]:
             if not method.needs_model:
                 continue
+            from tangle_drake.tangle_cnn.checkpoint import read_checkpoint  # imports torch
+
             path = method.model_for(spec.name)
             trained = set((read_checkpoint(path).get("data") or {}).get("pile_seeds") or ())
             if shared := tested & trained:

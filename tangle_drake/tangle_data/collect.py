@@ -82,18 +82,8 @@ def collect(settings: CollectSettings, out: Path, samples: int, workers: int | N
     _check_counts(samples, workers)
     scenario_text = default_scenario_text() if scenario_text is None else scenario_text
     scenario = data_scenario(scenario_text, settings)
-    part = load_part(settings.part, mesh_scale=settings.mesh_scale)  # builds the cache once
-    for warning in check_pile(scenario):  # refuses a pile that cannot be made
-        print(warning, file=sys.stderr)
-    store = DatasetStore(out, collection_identity(settings, scenario, part))
-    for notice in store.notices:
-        print(f"notice: {notice}", file=sys.stderr)
-    try:
-        return _run(store, TangleDataSimulator, (scenario_text, settings),
-                    settings.lifts_per_pile, settings.seed, samples, workers, ray_address,
-                    part.name, show_progress)
-    finally:
-        store.close()
+    return _collect_into(out, settings, scenario, TangleDataSimulator, scenario_text,
+                         settings.lifts_per_pile, samples, workers, ray_address, show_progress)
 
 
 def collect_picks(settings: PickDataSettings, out: Path, samples: int,
@@ -108,15 +98,25 @@ def collect_picks(settings: PickDataSettings, out: Path, samples: int,
     scenario = pick_data_scenario(scenario_text, settings)
     scenario_mode(scenario, "the pick-data scenario")  # a gripper to pick with, or say so
     settings = replace(settings, parts_per_pile=scenario.pile.total_count)
-    part = load_part(settings.part, mesh_scale=settings.mesh_scale)
-    for warning in check_pile(scenario):
+    return _collect_into(out, settings, scenario, PhysicalPickSimulator, scenario_text,
+                         settings.top_k, samples, workers, ray_address, show_progress)
+
+
+def _collect_into(out: Path, settings: CollectSettings | PickDataSettings, scenario: Scenario,
+                  factory: type, scenario_text: str, per_task: int, samples: int,
+                  workers: int | None, ray_address: str | None,
+                  show_progress: bool | None) -> CollectionResult:
+    """Check the part and its pile, open (or resume) the dataset at ``out`` and run
+    ``factory``'s tasks into it."""
+    part = load_part(settings.part, mesh_scale=settings.mesh_scale)  # builds the cache once
+    for warning in check_pile(scenario):  # refuses a pile that cannot be made
         print(warning, file=sys.stderr)
     store = DatasetStore(out, collection_identity(settings, scenario, part))
     for notice in store.notices:
         print(f"notice: {notice}", file=sys.stderr)
     try:
-        return _run(store, PhysicalPickSimulator, (scenario_text, settings), settings.top_k,
-                    settings.seed, samples, workers, ray_address, part.name, show_progress)
+        return _run(store, factory, (scenario_text, settings), per_task, settings.seed,
+                    samples, workers, ray_address, part.name, show_progress)
     finally:
         store.close()
 

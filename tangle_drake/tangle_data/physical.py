@@ -31,7 +31,7 @@ from tangle_drake.bench.physical_pick import PhysicalPick, PickRig
 from tangle_drake.bench.trials import scenario_mode
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.crops import DEFAULT_CROP, CropSpec, extract_crop
-from tangle_drake.dataset import OPTIONAL_FIELDS, SAMPLE_FIELDS
+from tangle_drake.dataset import rows_to_arrays
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.parts import load_part
@@ -188,8 +188,5 @@ class PickRows:
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The shard's arrays, with the right dtypes and shapes even when empty."""
-        dtypes = SAMPLE_FIELDS | OPTIONAL_FIELDS
-        shapes = {"crop": (self.settings.crop.size_px,) * 2, "pose": (4, 4)}
-        return {name: np.asarray(values, dtype=dtypes[name]) if values else
-                np.zeros((0, *shapes.get(name, ())), dtype=dtypes[name])
-                for name, values in self.rows.items()}
+        return rows_to_arrays(self.rows, {"crop": (self.settings.crop.size_px,) * 2,
+                                          "pose": (4, 4)})

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tangle_drake.dataset import OPTIONAL_FIELDS, SAMPLE_FIELDS
+from tangle_drake.dataset import SAMPLE_FIELDS, rows_to_arrays
 from tangle_drake.graspability import GraspCandidate
 from tangle_drake.tangle_data.labels import PickLabel
 from tangle_drake.tangle_data.settings import CollectSettings
@@ -71,12 +71,6 @@ class SampleRows:
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The shard's arrays, with the right dtypes and shapes even when empty."""
-        dtypes = SAMPLE_FIELDS | OPTIONAL_FIELDS
-        shapes = {"crop": (self.settings.crop.size_px,) * 2, "pose": (4, 4),
-                  "full_depth": () if self.full_depth is None else self.full_depth.shape}
-        out = {}
-        for name in self.names:
-            values = self.rows[name]
-            out[name] = (np.asarray(values, dtype=dtypes[name]) if values else
-                         np.zeros((0, *shapes.get(name, ())), dtype=dtypes[name]))
-        return out
+        return rows_to_arrays(self.rows, {
+            "crop": (self.settings.crop.size_px,) * 2, "pose": (4, 4),
+            "full_depth": () if self.full_depth is None else self.full_depth.shape})
