@@ -157,9 +157,11 @@ def estimate_from(samples: np.ndarray, tare: float, settings: PayloadSettings,
                            len(samples), float(np.mean(samples)), weight)
 
 
-def tare_std(samples: int, settings: PayloadSettings) -> float:
-    """The share of a tare of ``samples`` samples in a count's standard error, parts."""
-    return settings.sensor_noise / (settings.part_mass * G) / math.sqrt(max(samples, 1))
+def tare_is_precise(samples: int, settings: PayloadSettings) -> bool:
+    """Whether a tare of ``samples`` samples leaves room in ``target_std`` for the weighing:
+    its share of a count's standard error is below ``target_std`` over the root of two."""
+    share = settings.sensor_noise / (settings.part_mass * G) / math.sqrt(max(samples, 1))
+    return share <= settings.target_std / math.sqrt(2)
 
 
 class PayloadEstimator(LeafSystem):
@@ -177,8 +179,8 @@ class PayloadEstimator(LeafSystem):
         self._max_samples = max(self._samples, round(settings.max_window / settings.period))
         # A tare is a rolling window: of ``window`` where that is precise enough (the default
         # sensor), else as long as the carrier stands still, up to ``max_window``.
-        self._tare_samples = self._samples if tare_std(self._samples, settings) <= \
-            settings.target_std / math.sqrt(2) else self._max_samples
+        self._tare_samples = self._samples if tare_is_precise(self._samples, settings) else \
+            self._max_samples
         self._force = self.DeclareVectorInputPort("force_torque", 6)
         self._carrier = self.DeclareVectorInputPort("carrier_state", carrier_state_size)
         self._request = self.DeclareAbstractInputPort("request",
@@ -231,9 +233,9 @@ class PayloadEstimator(LeafSystem):
         s = replace(s, window=window)
         n, settings = len(window), self._settings
         if tare:
-            precise = tare_std(n, settings) <= settings.target_std / math.sqrt(2)
             return replace(s, tare=float(np.mean(window)), tare_samples=n,
-                           tared=n >= self._samples and (precise or n >= self._max_samples))
+                           tared=n >= self._samples and (tare_is_precise(n, settings)
+                                                         or n >= self._max_samples))
         if n >= self._samples and s.tare is not None and not s.estimate.ready:
             estimate = estimate_from(np.array(window), s.tare, settings, s.tare_samples)
             if estimate.std <= settings.target_std or estimate.swinging or \
