@@ -48,7 +48,8 @@ def test_each_pick_is_labelled_by_what_the_simulation_saw_come_up(uninterrupted)
     assert counts["one"] + counts["tangled"] + counts["none"] == counts["samples"]
     for outcome, lifted, label in zip(samples["outcome"], samples["sim_lifted"],
                                       samples["label"], strict=True):
-        assert outcome == min(int(lifted), 2)  # none 0, one 1, several 2
+        # none 0, one 1, several 2; -1: no lift, the fingers closed on nothing
+        assert outcome == (0 if lifted == -1 else min(int(lifted), 2))
         assert label == {0: -1, 1: 0, 2: 1}[int(outcome)]  # tangled: several
     for task in np.unique(samples["task"]):
         mine = samples["task"] == task
@@ -83,6 +84,33 @@ def test_an_interrupted_collection_resumes_to_the_same_picks(uninterrupted, tmp_
                       SAMPLES, workers=1, show_progress=False)
 
 
+def test_the_fast_pick_ends_an_empty_close_there_with_the_full_picks_outcome():
+    from tangle_drake.bench.methods import Method
+    from tangle_drake.bench.physical_pick import PickRig
+    from tangle_drake.paths import diagrams_dir
+    from tangle_drake.pick.outcome import Outcome
+    from tangle_drake.tangle_data.physical import PICK_SCENARIO, pick_data_scenario
+
+    settings = PickDataSettings(part="e_shape", parts_per_pile=4, physics=None)
+    scenario = pick_data_scenario((diagrams_dir() / PICK_SCENARIO).read_text(), settings)
+    methods = [Method("graspability", "graspability")]
+    full, fast = (PickRig(scenario, methods, "e_shape", True, fast=f) for f in (False, True))
+    settled = full.settle(2)  # rank 0 closes on nothing, rank 1 brings up one E
+    for rank, outcome in ((0, Outcome.NONE), (1, Outcome.ONE)):
+        run = MethodRun("graspability", 0, only=rank)
+        slow, quick = full.pick(settled.state, run), fast.pick(settled.state, run)
+        assert slow.record.outcome is quick.record.outcome is outcome
+        assert quick.record.candidate.u == slow.record.candidate.u
+        assert np.array_equal(quick.depth, slow.depth)
+        if outcome is Outcome.NONE:  # judged at the close, two simulated seconds sooner
+            assert quick.record.width < fast.empty_width and quick.record.lifted is None
+            assert quick.sim_s < slow.sim_s - 1.5
+            assert 0 < quick.record.execution_s < quick.sim_s
+        else:  # a grasp that holds something is the full pick, step for step
+            assert (quick.sim_s, quick.record.width, quick.record.lifted) == \
+                (slow.sim_s, slow.record.width, slow.record.lifted)
+
+
 def test_a_forced_candidate_is_that_candidate_alone():
     candidates = [SimpleNamespace(u=float(i), v=0.0, angle_deg=0.0, score=1 - i / 10, pose=None)
                   for i in range(4)]
@@ -104,6 +132,7 @@ def test_a_forced_candidate_is_that_candidate_alone():
     (["--repeat", "3"], "--repeat is an option of the force lift"),
     (["--lift-height", "0.2"], "--lift-height"),
     (["--top-k", "0"], "--top-k"),
+    (["--label", "lift", "--full-pick"], "--full-pick is an option of --label pick"),
     (["--parts-per-pile", "0"], "--parts-per-pile"),
     (["--scenario", "no_such.yaml"], "cannot read scenario"),
 ])

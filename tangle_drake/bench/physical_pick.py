@@ -8,6 +8,14 @@ its ``method`` input. Each pick restores a settled plant state into the diagram 
 until its one pick is recorded. Until the robot reaches into the bin the pile's bodies are
 locked: at rest and untouched, they cost the contact solver nothing (the approach is a fifth
 of a floating pick), and unlocking them at the descent leaves them exactly where they lay.
+
+A ``fast`` rig (the physical-pick data's) ends a grasp whose fingers closed on nothing at the
+close, judged empty as the top of the lift would judge it (fingers closed past the empty width
+are empty whatever the lift does: :func:`~tangle_drake.pick.outcome.classify_lift`), instead of
+lifting the empty gripper out: the same outcome, without the lift's simulated seconds. Keeping
+the pile locked through the descent until the fingers touch it was tried and dropped: a pile
+frozen for that second instead of creeping changes a pick's outcome more often than moving the
+grasp 0.1 mm does (``tools/fast_pick_agreement.py``).
 """
 
 from __future__ import annotations
@@ -22,8 +30,8 @@ from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.pick.demo import SIM_TIME_PER_PICK
 from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
-from tangle_drake.pick.episode import PickEpisode
-from tangle_drake.pick.outcome import PickRecord
+from tangle_drake.pick.episode import PickEpisode, RunEnd
+from tangle_drake.pick.outcome import Outcome, PickRecord, classify_lift
 from tangle_drake.pick.planner import Mode
 from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler, SettledPile
@@ -61,7 +69,7 @@ class PickRig:
     """
 
     def __init__(self, scenario: Scenario, methods: Sequence[Method], part: str,
-                 floating: bool) -> None:
+                 floating: bool, fast: bool = False) -> None:
         settings = pick_settings(scenario, max_picks=1)
         if floating:
             settings = replace(settings, settle_time=0.05, close_delay=0.05,
@@ -75,6 +83,8 @@ class PickRig:
         self.sim_limit = FLOATING_SIM_LIMIT if floating else SIM_TIME_PER_PICK
         self.update_period = settings.update_period
         """The planner's: while the pile is locked, the driver looks at every update."""
+        self.fast = fast
+        self.empty_width = settings.empty_width
         self.methods = {m.name: m for m in methods}
         self.intrinsics: CameraIntrinsics = camera_model(scenario).intrinsics
         station = self.episode.pick.station
@@ -114,6 +124,28 @@ class PickRig:
             return self.update_period if locked else _POLL
 
         episode.start(state, prepare)
-        result = episode.run(self.sim_limit, step=step)
+        result = episode.run(self.sim_limit, step=step,
+                             pause_at=Mode.LIFT if self.fast else None)
+        if result.end is RunEnd.PAUSED:
+            if (empty := self._empty_close()) is not None:
+                return PhysicalPick(empty, result.time, self._image(depth))
+            result = episode.run(self.sim_limit - result.time, step=step)
         record = result.records[0] if result.records else None
-        return PhysicalPick(record, result.time, np.asarray(depth[0].data)[:, :, 0].copy())
+        return PhysicalPick(record, result.time, self._image(depth))
+
+    def _empty_close(self) -> PickRecord | None:
+        """At the end of the close, the record of a grasp whose fingers closed on nothing,
+        judged as the top of the lift would judge it; ``None`` if they hold something."""
+        context = self.episode.context
+        station = self.episode.pick.station
+        width = float(station.GetOutputPort("gripper.state_measured").Eval(
+            station.GetMyContextFromRoot(context))[0])
+        if classify_lift(width, None, self.empty_width) is not Outcome.NONE:
+            return None
+        record = self.episode.pick.diagram.GetOutputPort("current_pick").Eval(context)
+        return replace(record, outcome=Outcome.NONE, width=width,
+                       execution_s=context.get_time() - record.started_at)
+
+    @staticmethod
+    def _image(depth: list) -> np.ndarray:
+        return np.asarray(depth[0].data)[:, :, 0].copy()

@@ -70,6 +70,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--no-randomise", dest="randomise", action="store_false",
                         help="--label pick: pick under the model's physics, not under a draw "
                              "per pick of friction, finger-pad stiffness and grasp error")
+    parser.add_argument("--full-pick", dest="fast", action="store_false",
+                        help="--label pick: run every pick to the top of its lift, as the "
+                             "benchmark does (default: a grasp that closed on nothing ends "
+                             "there, with the same outcome)")
     parser.add_argument("--scenario", default=None,
                         help="data scenario YAML (default: the shipped tangle_data.yaml; "
                              "with --label pick the benchmark's floating_gripper.yaml)")
@@ -132,7 +136,7 @@ def pick_settings_from_args(args: argparse.Namespace):
         raise TangleDrakeError(f"--{given[0].replace('_', '-')} is an option of the force lift "
                                "(--label lift); a physical pick has none")
     settings = PickDataSettings(part=args.part, mesh_scale=args.mesh_scale, seed=args.seed,
-                                parts_per_pile=args.parts_per_pile)
+                                parts_per_pile=args.parts_per_pile, fast=args.fast)
     if not args.randomise:
         settings = replace(settings, physics=None)
     if args.top_k is not None:
@@ -146,10 +150,11 @@ def pick_settings_from_args(args: argparse.Namespace):
 def run(args: argparse.Namespace) -> int:
     if args.label == "pick":
         return run_picks(args)
-    if not args.randomise:
+    if not args.randomise or not args.fast:
         from tangle_drake.errors import TangleDrakeError
 
-        raise TangleDrakeError("--no-randomise is an option of --label pick; the force lift "
+        flag = "--no-randomise" if not args.randomise else "--full-pick"
+        raise TangleDrakeError(f"{flag} is an option of --label pick; the force lift "
                                "runs the model's physics (--repeat measures its stability)")
     from tangle_drake.tangle_data.collect import collect
 

@@ -42,6 +42,8 @@ class RunEnd(enum.Enum):
     """The hardware station's safety supervisor stopped the robot."""
     TIMEOUT = "timeout"
     """The simulated time allowed ran out first."""
+    PAUSED = "paused"
+    """The planner entered the caller's ``pause_at`` mode; running again goes on from there."""
 
 
 @dataclass(frozen=True)
@@ -58,9 +60,10 @@ class PickRun:
 
 def run_picks(clock: Clock, pick: PickDiagram, time_limit: float, *,
               on_pick: Callable[[PickRecord], None] | None = None,
-              step: Callable[[Mode], float] | None = None) -> PickRun:
-    """Advance the pick diagram until its planner is done, the station's safety stops it, or
-    ``time_limit`` simulated seconds have passed.
+              step: Callable[[Mode], float] | None = None,
+              pause_at: Mode | None = None) -> PickRun:
+    """Advance the pick diagram until its planner is done, the station's safety stops it,
+    ``time_limit`` simulated seconds have passed, or it enters ``pause_at``.
 
     ``on_pick`` is called with each pick as it ends; ``step`` says how far to advance next
     given the planner's mode (default :data:`POLL`).
@@ -76,6 +79,9 @@ def run_picks(clock: Clock, pick: PickDiagram, time_limit: float, *,
             end = RunEnd.STOPPED
             message = pick.station.GetOutputPort("safety.report").Eval(
                 pick.station.GetMyContextFromRoot(context)).message
+            break
+        if mode is pause_at:
+            end = RunEnd.PAUSED
             break
         if context.get_time() >= limit:
             end = RunEnd.TIMEOUT

@@ -358,6 +358,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
             depth = np.asarray(self._depth.Eval(context).data)[:, :, 0]
             record.crop = candidate_crops(depth, self._intrinsics, [record.candidate],
                                           self._settings.record_crop)[0]
+        record.started_at = t
         s = replace(s, plan=plan, record=record, started=t, width=self._settings.open_width)
         return self._enter(Mode.APPROACH, s, t)
 

@@ -69,6 +69,9 @@ class PickDataSettings:
     physics: PhysicsSpread | None = field(default_factory=PhysicsSpread)
     """Each pick's friction, pad stiffness and grasp error drawn from this (seeded per pick),
     so a model learns picking, not one simulator's gripper; ``None``: the model's physics."""
+    fast: bool = True
+    """The rig's shortcut (:class:`~tangle_drake.bench.physical_pick.PickRig`): a grasp that
+    closed on nothing ends at the close, with the outcome the lift would have ended with."""
 
     def validate(self) -> None:
         if not (math.isfinite(self.mesh_scale) and self.mesh_scale > 0):
@@ -111,7 +114,7 @@ class PhysicalPickSimulator:
         self.part = load_part(settings.part, mesh_scale=settings.mesh_scale)
         mode = scenario_mode(self.scenario, "the pick-data scenario")
         self.rig = PickRig(self.scenario, [Method("graspability", "graspability")],
-                           self.part.name, floating=mode == "floating")
+                           self.part.name, floating=mode == "floating", fast=settings.fast)
 
     def run_task(self, task: int) -> TaskResult:
         """Settle task ``task``'s pile and pick each of its first candidates from it."""
