@@ -6,7 +6,8 @@ same trials.
 - :func:`paired_difference`: the difference of two success rates measured on the same
   trials, with Newcombe's (1998b, method 10) square-and-add interval from the two Wilson
   intervals and the correlation of the pairs, and the exact McNemar test on the discordant
-  trials (one method succeeded, the other did not).
+  trials (one method succeeded, the other did not), and the smallest difference the trials
+  could detect (:func:`detectable_difference`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,8 @@ from dataclasses import dataclass
 from scipy.stats import binomtest, norm
 
 CONFIDENCE = 0.95
+POWER = 0.8
+"""The chance of detecting a difference of :func:`detectable_difference`'s size."""
 
 
 def _z(confidence: float) -> float:
@@ -54,6 +57,9 @@ class PairedDifference:
     """Trials where B succeeded and A did not."""
     p_value: float
     """Exact two-sided McNemar test of A = B (the binomial test of the discordant trials)."""
+    detectable: float
+    """The smallest true difference these trials detect with :data:`POWER` at the interval's
+    level (:func:`detectable_difference`)."""
 
 
 def paired_difference(a: Sequence[bool], b: Sequence[bool],
@@ -68,7 +74,7 @@ def paired_difference(a: Sequence[bool], b: Sequence[bool],
     b_only = sum(1 for x, y in zip(a, b, strict=True) if y and not x)
     neither = n - both - a_only - b_only
     if n == 0:
-        return PairedDifference(0, 0.0, 0.0, 0.0, -1.0, 1.0, 0, 0, 1.0)
+        return PairedDifference(0, 0.0, 0.0, 0.0, -1.0, 1.0, 0, 0, 1.0, 1.0)
     p1, p2 = (both + a_only) / n, (both + b_only) / n
     l1, u1 = wilson(both + a_only, n, confidence)
     l2, u2 = wilson(both + b_only, n, confidence)
@@ -81,7 +87,21 @@ def paired_difference(a: Sequence[bool], b: Sequence[bool],
     discordant = a_only + b_only
     p_value = binomtest(a_only, discordant).pvalue if discordant else 1.0
     return PairedDifference(n, p1, p2, difference, max(-1.0, lower), min(1.0, upper),
-                            a_only, b_only, float(p_value))
+                            a_only, b_only, float(p_value),
+                            detectable_difference(discordant, n, confidence))
+
+
+def detectable_difference(discordant: int, n: int, confidence: float = CONFIDENCE,
+                          power: float = POWER) -> float:
+    """The smallest difference of two success rates that ``n`` paired trials detect with
+    ``power``, when ``discordant`` of them split the methods: McNemar's normal approximation,
+    ``(z_(1-alpha/2) + z_power) * sqrt(d / n)`` with ``d`` the discordant fraction (Connor
+    1987). Methods that never split (``discordant`` 0) are taken to split once: no run shows
+    that two methods can never differ. 1 for no trials."""
+    if n == 0:
+        return 1.0
+    d = max(discordant, 1) / n
+    return min(1.0, (_z(confidence) + float(norm.ppf(power))) * math.sqrt(d / n))
 
 
 def _phi(both: int, a_only: int, b_only: int, neither: int) -> float:
