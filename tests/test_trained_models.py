@@ -52,3 +52,15 @@ def test_the_model_card_says_what_the_shipped_files_hold():
         tested = tool.test_rows(part)  # raises if the figures belong to another model file
         assert tested is not None, f"{part}: the shipped model was not tested"
         assert tested[0] in card, part
+
+
+def test_a_part_file_picks_with_the_model_teach_wrote_beside_it(tmp_path):
+    import shutil
+
+    part_file = tmp_path / "part.json"
+    part_file.write_text(json.dumps({"mesh": "ring.stl", "mesh_scale": 0.001}))
+    missing = resolve_tangle_choice(str(part_file))
+    assert missing.model is None and str(tmp_path / "model.pt") in missing.notice
+    shutil.copy(trained_model_path("c_ring"), tmp_path / "model.pt")
+    choice = resolve_tangle_choice(str(part_file))
+    assert (choice.model, choice.rule, choice.notice) == (tmp_path / "model.pt", "harmonic", None)

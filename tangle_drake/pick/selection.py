@@ -42,10 +42,13 @@ class TangleChoice:
     """Something the user should read (a fallback), or ``None``."""
 
 
-def trained_model_path(part: str, objective: str = DEFAULT_OBJECTIVE) -> Path:
-    """Where the shipped model of ``objective`` for ``part`` (a built-in name or a mesh's
-    stem) would be: ``<part>.pt`` for the tangle CNN, ``<part>.<objective>.pt`` else."""
+def trained_model_path(part: str | Path, objective: str = DEFAULT_OBJECTIVE) -> Path:
+    """Where the model of ``objective`` for ``part`` would be: for a built-in name or a mesh,
+    the shipped ``<part>.pt`` (``<part>.<objective>.pt`` for another objective); for a part
+    file, ``model.pt`` beside it, where ``tangle-drake teach`` writes the one it makes."""
     suffix = "" if objective == DEFAULT_OBJECTIVE else f".{objective}"
+    if Path(part).suffix.lower() == PART_FILE_SUFFIX:
+        return Path(part).parent / f"model{suffix}.pt"
     return TRAINED_DIR / f"{Path(part).stem}{suffix}.pt"
 
 

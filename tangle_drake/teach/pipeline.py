@@ -31,6 +31,7 @@ import trimesh
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import load_part
+from tangle_drake.pick.selection import trained_model_path
 from tangle_drake.teach.check import PartCheck, check_part, scenario_of, settle_verdict
 
 STAGES = ("check", "labels", "train", "test", "bench", "card")
@@ -87,7 +88,7 @@ class Teacher:
 
     @property
     def model(self) -> Path:
-        return self.out / "model.pt"
+        return trained_model_path(self.part_file)
 
     def _identity(self) -> dict:
         mesh = Path(self.settings.mesh)
