@@ -133,6 +133,9 @@ def test_a_forced_candidate_is_that_candidate_alone():
     (["--lift-height", "0.2"], "--lift-height"),
     (["--top-k", "0"], "--top-k"),
     (["--label", "lift", "--full-pick"], "--full-pick is an option of --label pick"),
+    (["--label", "lift", "--depth-noise", "0.001"], "--depth-noise is an option of --label"),
+    (["--depth-noise", "-0.001"], "--depth-noise must be >= 0"),
+    (["--no-randomise", "--depth-noise", "0.001"], "drop --depth-noise"),
     (["--parts-per-pile", "0"], "--parts-per-pile"),
     (["--scenario", "no_such.yaml"], "cannot read scenario"),
 ])
@@ -180,9 +183,26 @@ def test_a_pick_draws_its_physics_from_the_seed_within_the_spread(uninterrupted)
     assert offsets[:, 2].std() == pytest.approx(spread.angle_deg, rel=0.2)
     assert PickPhysics.draw(PhysicsSpread(0, 0, 0, 0), np.random.default_rng(0)) == \
         PickPhysics(1.0, 1.0, (0.0, 0.0, 0.0))
-    # The collection records each pick's draw.
+    # The collection records each pick's draw, and the depth noise its crop saw.
     record = json.loads((uninterrupted / "shard_0000000.json").read_text())
     assert [p["rank"] for p in record["physics"]] == list(range(record["samples"]))
+    noise = record["depth_noise_m"]
+    assert len(noise) == record["samples"]
+    assert all(0 <= n <= SETTINGS.depth_noise_m for n in noise) and len(set(noise)) == len(noise)
+
+
+def test_a_crop_sees_the_depth_with_the_noise_drawn_for_its_pick():
+    from tangle_drake.tangle_data.physical import noisy_depth
+    from tangle_drake.tangle_data.seeds import depth_noise_rng
+
+    depth = np.full((480, 640), 0.5, np.float32)
+    noisy = noisy_depth(depth, 0.0004, depth_noise_rng(0, 1, 2))
+    assert noisy.dtype == depth.dtype and noisy.shape == depth.shape
+    assert (noisy - depth).std() == pytest.approx(0.0004, rel=0.02)
+    assert abs((noisy - depth).mean()) < 1e-5
+    assert np.array_equal(noisy, noisy_depth(depth, 0.0004, depth_noise_rng(0, 1, 2)))
+    assert not np.array_equal(noisy, noisy_depth(depth, 0.0004, depth_noise_rng(0, 1, 3)))
+    assert noisy_depth(depth, 0.0, depth_noise_rng(0, 1, 2)) is depth
 
 
 def test_the_grasp_error_moves_the_executed_pose_not_what_the_method_saw():

@@ -68,8 +68,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--full-depth", action="store_true",
                         help="also store each sample's whole depth image (~1.2 MB each)")
     parser.add_argument("--no-randomise", dest="randomise", action="store_false",
-                        help="--label pick: pick under the model's physics, not under a draw "
-                             "per pick of friction, finger-pad stiffness and grasp error")
+                        help="--label pick: pick under the model's physics and crop the "
+                             "renderer's depth, not under a draw per pick of friction, "
+                             "finger-pad stiffness, grasp error and depth noise")
+    parser.add_argument("--depth-noise", type=float, default=None, metavar="M",
+                        help="--label pick: each pick's crop sees the depth with Gaussian "
+                             "noise of a standard deviation drawn in [0, M] per pick, m "
+                             "(default 0.0005; 0: the renderer's depth)")
     parser.add_argument("--full-pick", dest="fast", action="store_false",
                         help="--label pick: run every pick to the top of its lift, as the "
                              "benchmark does (default: a grasp that closed on nothing ends "
@@ -137,8 +142,13 @@ def pick_settings_from_args(args: argparse.Namespace):
                                "(--label lift); a physical pick has none")
     settings = PickDataSettings(part=args.part, mesh_scale=args.mesh_scale, seed=args.seed,
                                 parts_per_pile=args.parts_per_pile, fast=args.fast)
+    if args.depth_noise is not None:
+        settings = replace(settings, depth_noise_m=args.depth_noise)
     if not args.randomise:
-        settings = replace(settings, physics=None)
+        if args.depth_noise:
+            raise TangleDrakeError("--no-randomise crops the renderer's depth: drop "
+                                   "--depth-noise")
+        settings = replace(settings, physics=None, depth_noise_m=0.0)
     if args.top_k is not None:
         settings = replace(settings, top_k=args.top_k)
     if args.crop_size is not None:
@@ -150,10 +160,14 @@ def pick_settings_from_args(args: argparse.Namespace):
 def run(args: argparse.Namespace) -> int:
     if args.label == "pick":
         return run_picks(args)
-    if not args.randomise or not args.fast:
+    pick_only = [flag for flag, given in (("--no-randomise", not args.randomise),
+                                          ("--full-pick", not args.fast),
+                                          ("--depth-noise", args.depth_noise is not None))
+                 if given]
+    if pick_only:
         from tangle_drake.errors import TangleDrakeError
 
-        flag = "--no-randomise" if not args.randomise else "--full-pick"
+        flag = pick_only[0]
         raise TangleDrakeError(f"{flag} is an option of --label pick; the force lift "
                                "runs the model's physics (--repeat measures its stability)")
     from tangle_drake.tangle_data.collect import collect

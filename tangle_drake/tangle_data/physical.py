@@ -11,7 +11,9 @@ stored with what came up, counted by the simulation: ``outcome`` 1 = exactly one
 (unreachable, in collision) is no label: the task's record lists it with its reason. So the
 dataset says, per pile, what each of the five candidates would have done: the top-5 oracle.
 Each pick runs under its own draw of the physics (friction, the pads' stiffness, a few mm and
-degrees of grasp error; :class:`~.perturb.PhysicsSpread`), recorded in the task's record.
+degrees of grasp error; :class:`~.perturb.PhysicsSpread`), recorded in the task's record, and
+its crop is cut from the depth image with the camera's noise added (:func:`noisy_depth`): a
+real sensor's depth is never the renderer's.
 
 Pile seeds come from the collection seed (:mod:`.seeds`), not the benchmark's, so a model
 trained on these piles is tested on others.
@@ -40,7 +42,7 @@ from tangle_drake.pick.outcome import Outcome
 from tangle_drake.pick.recovery import Verdict
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
 from tangle_drake.tangle_data.perturb import PhysicsSpread, PickPhysics
-from tangle_drake.tangle_data.seeds import physics_rng, pile_seed
+from tangle_drake.tangle_data.seeds import depth_noise_rng, physics_rng, pile_seed
 from tangle_drake.tangle_data.simulator import TaskResult
 
 LABEL = "pick"
@@ -69,6 +71,11 @@ class PickDataSettings:
     physics: PhysicsSpread | None = field(default_factory=PhysicsSpread)
     """Each pick's friction, pad stiffness and grasp error drawn from this (seeded per pick),
     so a model learns picking, not one simulator's gripper; ``None``: the model's physics."""
+    depth_noise_m: float = 0.0005
+    """Each pick's crop sees the depth image with Gaussian noise per pixel, of a standard
+    deviation drawn uniform in [0, this] per pick (seeded), m: an industrial structured-light
+    sensor's ~0.1-0.5 mm at half a metre. The graspability candidates, which the pick
+    executes, come from the clean image. 0: the renderer's depth."""
     fast: bool = True
     """The rig's shortcut (:class:`~tangle_drake.bench.physical_pick.PickRig`): a grasp that
     closed on nothing ends at the close, with the outcome the lift would have ended with."""
@@ -85,6 +92,8 @@ class PickDataSettings:
         if not 0 <= self.seed < 2**63:
             raise TangleDrakeError(f"--seed must be a non-negative 63-bit integer, got "
                                    f"{self.seed}")
+        if not (math.isfinite(self.depth_noise_m) and self.depth_noise_m >= 0):
+            raise TangleDrakeError(f"--depth-noise must be >= 0, got {self.depth_noise_m}")
         if not (math.isfinite(self.crop.size_m) and self.crop.size_m > 0):
             raise TangleDrakeError(f"--crop-size must be positive, got {self.crop.size_m}")
 
@@ -124,7 +133,8 @@ class PhysicalPickSimulator:
         settled = self.rig.settle(seed)
         rows = PickRows(s, self.part.name, self.rig.intrinsics)
         stats = {"task": task, "pile_seed": seed, "samples": 0, "tangled": 0, "one": 0,
-                 "none": 0, "failed": 0, "failures": [], "physics": [], "sim_s": 0.0,
+                 "none": 0, "failed": 0, "failures": [], "physics": [], "depth_noise_m": [],
+                 "sim_s": 0.0,
                  "pile": {"settled": settled.report.settled,
                           "in_bin": settled.report.num_in_bin,
                           "settle_time_s": settled.report.settle_time}}
@@ -142,7 +152,10 @@ class PhysicalPickSimulator:
                 stats["failed"] += 1
                 stats["failures"].append({"rank": rank, "failure": why.value})
                 continue
-            rows.add(pick, rank, seed, task)
+            rng = depth_noise_rng(s.seed, task, rank)
+            noise = float(rng.uniform(0, s.depth_noise_m))
+            rows.add(pick, rank, seed, task, noisy_depth(pick.depth, noise, rng))
+            stats["depth_noise_m"].append(round(noise, 9))
             if physics is not None:
                 stats["physics"].append({"rank": rank, **physics.to_dict()})
             stats["samples"] += 1
@@ -154,6 +167,13 @@ class PhysicalPickSimulator:
         stats["wall_s"] = time.perf_counter() - wall
         stats["max_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         return TaskResult(task, rows.arrays(), stats)
+
+
+def noisy_depth(depth: np.ndarray, sigma_m: float, rng: np.random.Generator) -> np.ndarray:
+    """``depth`` with Gaussian noise of ``sigma_m`` on every pixel (``depth`` itself for 0)."""
+    if sigma_m == 0:
+        return depth
+    return depth + rng.normal(0.0, sigma_m, depth.shape).astype(depth.dtype)
 
 
 class PickRows:
@@ -170,10 +190,13 @@ class PickRows:
         self.intrinsics = intrinsics
         self.rows: dict[str, list] = {name: [] for name in self.FIELDS}
 
-    def add(self, pick: PhysicalPick, rank: int, pile_seed: int, task: int) -> None:
+    def add(self, pick: PhysicalPick, rank: int, pile_seed: int, task: int,
+            depth: np.ndarray) -> None:
+        """The pick's row, its crop cut from ``depth`` (the image the pick was chosen on, or
+        that with the camera's noise)."""
         record = pick.record
         c = record.candidate
-        crop = extract_crop(pick.depth, self.intrinsics, c.u, c.v, c.angle_deg,
+        crop = extract_crop(depth, self.intrinsics, c.u, c.v, c.angle_deg,
                             c.depth_m, self.settings.crop)
         code = OUTCOME_CODES[record.outcome]
         row = {"crop": crop, "label": pick_log.tangled_label(code), "score": c.score,

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-_PILE, _CHOICE, _PERTURB, _PHYSICS = 0, 1, 2, 3
+_PILE, _CHOICE, _PERTURB, _PHYSICS, _DEPTH_NOISE = 0, 1, 2, 3, 4
 
 
 def _stream(seed: int, task: int, purpose: int, *more: int) -> np.random.SeedSequence:
@@ -33,3 +33,8 @@ def perturbation_rng(seed: int, task: int, rank: int, repeat: int) -> np.random.
 def physics_rng(seed: int, task: int, rank: int) -> np.random.Generator:
     """Random generator of the physics of the physical pick of candidate ``rank``."""
     return np.random.default_rng(_stream(seed, task, _PHYSICS, rank))
+
+
+def depth_noise_rng(seed: int, task: int, rank: int) -> np.random.Generator:
+    """Random generator of the depth noise the crop of candidate ``rank``'s pick sees."""
+    return np.random.default_rng(_stream(seed, task, _DEPTH_NOISE, rank))
