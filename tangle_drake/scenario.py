@@ -23,6 +23,7 @@ from pydrake.systems.sensors import CameraConfig
 from tangle_drake.drivers.config import (
     DriverConfig,
     ForceTorqueSensor,
+    NextageDriver,
     ParallelJawDriver,
     camera_channel,
 )
@@ -200,6 +201,10 @@ class Scenario:
             if isinstance(config, ParallelJawDriver):
                 _require(config.force_limit > 0, f"model_drivers.{name}.force_limit",
                          "must be positive")
+            if isinstance(config, NextageDriver):
+                for limit in ("planning_velocity_limit", "planning_acceleration_limit"):
+                    _require(0 < getattr(config, limit) < float("inf"),
+                             f"model_drivers.{name}.{limit}", "must be positive and finite")
 
 
 class _Tagged(typing.NamedTuple):

@@ -1,15 +1,18 @@
 """IK, trajectories and whole-pick plans for the Nextage's left arm, on the planning plant."""
 
+import dataclasses
 import itertools
 
 import numpy as np
 import pytest
 from pydrake.math import RigidTransform, RotationMatrix
 
+from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.planning.arm_motion import ArmMotion
 from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses, symmetric_grasps
 from tangle_drake.planning.motion import PlanningError
+from tangle_drake.planning.motions import motion_for
 from tangle_drake.planning.trajectory import (
     chain,
     first_violation,
@@ -220,3 +223,30 @@ def test_a_grasp_whose_palm_hits_the_wall_is_reported(motion):
     with pytest.raises(PlanningError) as error:
         motion.plan_pick(X.GetAsMatrix4(), MEASURED_HOME)
     assert error.value.kind is FailureKind.COLLISION
+
+
+def _with_arm_limits(velocity: float, acceleration: float = 1.5):
+    scenario = resolve_scenario(None)
+    drivers = dict(scenario.model_drivers)
+    drivers["nextage"] = dataclasses.replace(drivers["nextage"],
+                                             planning_velocity_limit=velocity,
+                                             planning_acceleration_limit=acceleration)
+    return dataclasses.replace(scenario, model_drivers=drivers)
+
+
+def test_the_scenario_sets_the_arms_planning_limits():
+    default, brisk = motion_for(resolve_scenario(None)), motion_for(_with_arm_limits(1.9, 3.0))
+    assert (default.settings.velocity_limit, default.settings.acceleration_limit) == (1.0, 1.5)
+    assert (brisk.settings.velocity_limit, brisk.settings.acceleration_limit) == (1.9, 3.0)
+    end = HOME.copy()
+    end[LEFT_ARM] += 0.8
+    slow, fast = default.plan_line(HOME, end), brisk.plan_line(HOME, end)
+    assert fast.end_time() < 0.75 * slow.end_time()  # 1.03 s against 1.47 s
+    for t in samples(fast):
+        assert np.abs(fast.EvalDerivative(t, 1)).max() <= 1.9 + 1e-6
+        assert np.abs(fast.EvalDerivative(t, 2)).max() <= 3.0 + 1e-6
+
+
+def test_an_arm_planned_faster_than_its_joints_are_rated_is_refused():
+    with pytest.raises(TangleDrakeError, match=r"planning_velocity_limit.*rated speed, 1\.920"):
+        motion_for(_with_arm_limits(2.5))

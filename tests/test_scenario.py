@@ -61,6 +61,10 @@ camera: {focal: !FovDegrees {y: 40}}
     ("model_drivers: {nextage: !TeleportDriver {}}", "model_drivers"),
     ("model_drivers: {nextage: !NextageDriver {lcm_bus: nowhere}}",
      "model_drivers.nextage.lcm_bus"),
+    ("model_drivers: {nextage: !NextageDriver {planning_velocity_limit: 0}}",
+     "model_drivers.nextage.planning_velocity_limit"),
+    ("model_drivers: {nextage: !NextageDriver {planning_acceleration_limit: .inf}}",
+     "model_drivers.nextage.planning_acceleration_limit"),
 ])
 def test_malformed_field_is_named(text, field):
     with pytest.raises(TangleDrakeError, match=re.escape(f"'{field}'")):

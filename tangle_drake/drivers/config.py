@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from pydrake.systems.sensors import CameraConfig
 
 from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.robot import PLANNING_ACCELERATION_LIMIT, PLANNING_VELOCITY_LIMIT
 
 
 @dataclass
@@ -44,6 +45,11 @@ class NextageDriver(JointPositionDriver):
 
     command_channel: str = "NEXTAGE_COMMAND"
     status_channel: str = "NEXTAGE_STATUS"
+    planning_velocity_limit: float = PLANNING_VELOCITY_LIMIT
+    """Joint speed the pick's free moves are planned with, rad/s, at most the slowest moving
+    joint's rated speed (the chest's 1.92). The default is the ROS stack's conservative one."""
+    planning_acceleration_limit: float = PLANNING_ACCELERATION_LIMIT
+    """Joint acceleration the pick's moves are planned with, rad/s²."""
 
 
 @dataclass

@@ -27,7 +27,10 @@ def motion_for(scenario: Scenario, *, return_home: bool = True) -> Motion:
                                    "motion plans for a model named 'nextage'")
         from tangle_drake.planning.arm_motion import ArmMotion, ArmMotionSettings
 
-        settings = ArmMotionSettings(place_position=None if place is None else tuple(place))
+        settings = ArmMotionSettings(
+            velocity_limit=_rated(scenario, name, config.planning_velocity_limit),
+            acceleration_limit=config.planning_acceleration_limit,
+            place_position=None if place is None else tuple(place))
         return ArmMotion(scenario.bin, settings, tray=scenario.tray)
     if isinstance(config, GantryDriver):
         from tangle_drake.planning.gantry_motion import GantryMotion
@@ -35,3 +38,16 @@ def motion_for(scenario: Scenario, *, return_home: bool = True) -> Motion:
         return GantryMotion(scenario.bin, station_limits(scenario), return_home=return_home,
                             model=name, place=place)
     raise TangleDrakeError(f"no motion planner for {type(config).__name__}")
+
+
+def _rated(scenario: Scenario, name: str, velocity: float) -> float:
+    """``velocity``, checked against the rated speed of every joint an arm's pick moves (the
+    chest and the left arm, as the model files give them)."""
+    limits = station_limits(scenario)
+    rated = min(v for joint, v in zip(limits.joint_names, limits.velocity, strict=True)
+                if joint == "CHEST_JOINT0" or joint.startswith("LARM_"))
+    if velocity > rated:
+        raise TangleDrakeError(f"scenario field 'model_drivers.{name}.planning_velocity_limit': "
+                               f"{velocity} rad/s is faster than the slowest moving joint's "
+                               f"rated speed, {rated:.3f} rad/s")
+    return velocity
