@@ -7,8 +7,10 @@ often) and, at every shake, saves the whole diagram's context and finishes that 
 times from the same instant: under the model's physics, with every friction ×0.7 and ×1.3, and
 with the plant stepped at 1 ms instead of 2 ms (a second diagram, the saved context copied into
 it). Per shake and variant it records how the grasp ended (delivered one part, delivered
-several, put back) by the tray's count, and how far the part nearest the gripper moved in the
-gripper's frame during the shake (a wire slipping or pivoting between the pads). It prints each
+several, put back) by the tray's count, what the weighing after the shake read against the
+simulation's load-path count (held, and resting on the pile), and how far the parts touching
+the gripper before and after the shake moved in its frame (a wire slipping or pivoting between
+the pads; parts that fell from the pads are counted apart). It prints each
 variant's shake success (the shake left exactly one part, delivered) with 95 % intervals, and
 its per-shake agreement with the model's physics. Then the clearing goes on under the model's
 physics to the next shake.
@@ -40,6 +42,7 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.pick.diagram import build_pick_diagram, closed_loop_settings
 from tangle_drake.pick.episode import PickEpisode, RunEnd
+from tangle_drake.pick.load_path import LoadPathMonitor
 from tangle_drake.pick.planner import Mode
 from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler
@@ -62,6 +65,8 @@ SIM_LIMIT_PER_PART = 40.0
 class _Rig:
     episode: PickEpisode
     contacts: ContactScaler
+    load_path: LoadPathMonitor
+    """The simulation's count of what the gripper holds up, and what of it rests on the pile."""
     own: Context
     """A context of this rig's diagram, for its own parameters: SceneGraph keeps geometry in
     them, named by ids that another diagram's context does not know."""
@@ -75,6 +80,7 @@ def _rig(scenario: Scenario, method: Method, part: str) -> _Rig:
         selection=selection_wiring([method], part, scenario))
     episode = PickEpisode(pick)
     return _Rig(episode, ContactScaler(pick.station.plant, pick.station.scene_graph),
+                pick.diagram.GetSubsystemByName("load_path_monitor (sim only)"),
                 episode.context.Clone())
 
 
@@ -99,6 +105,16 @@ def _gripper_frame_positions(rig: _Rig, context: Context) -> np.ndarray:
                                                   np.ones(len(poses))].T).T[:, :3]
 
 
+def _in_pads(rig: _Rig, context: Context) -> set[int]:
+    """Pile indices of the parts touching the gripper itself (held in or against the pads)."""
+    monitor = rig.load_path
+    touching = monitor.touching(monitor.GetInputPort("contact_results").Eval(
+        monitor.GetMyContextFromRoot(context)))
+    gripper = monitor.gripper_bodies
+    pile = [int(b.index()) for b in rig.episode.pick.station.pile_bodies]
+    return {i for i, body in enumerate(pile) if touching.get(body, set()) & gripper}
+
+
 def _tray_count(rig: _Rig, context: Context) -> int:
     tray = rig.episode.pick.tray
     return round(tray.GetOutputPort("tray_count").Eval(tray.GetMyContextFromRoot(context))[0])
@@ -111,24 +127,37 @@ def _finish_grasp(rig: _Rig, saved: Context, run: MethodRun, friction: float,
     _resume(rig, saved, run, friction)
     context = rig.episode.context
     before = _gripper_frame_positions(rig, context)
-    target = int(np.argmin(np.linalg.norm(before, axis=1)))
+    in_pads = _in_pads(rig, context)
     tray = _tray_count(rig, context)
     wall = time.perf_counter()
     rig.episode.run(GRASP_LIMIT, pause_at=Mode.WEIGH)  # the shake is over
-    slip = float(np.linalg.norm(_gripper_frame_positions(rig, context)[target] - before[target]))
+    kept = in_pads & _in_pads(rig, context)
+    moved = np.linalg.norm(_gripper_frame_positions(rig, context) - before, axis=1)
+    slip = float(max((moved[i] for i in kept), default=float("nan")))
     picks = rig.episode.pick.diagram.GetOutputPort("picks")
     mode = rig.episode.pick.diagram.GetOutputPort("mode")
+    held = rig.load_path.GetOutputPort("held_count")
+    payload = rig.episode.pick.payload
+    weighing = None
+    while mode.Eval(context) is Mode.WEIGH:  # the weighing after the shake, and its truth
+        estimate = payload.GetOutputPort("payload").Eval(payload.GetMyContextFromRoot(context))
+        count = held.Eval(rig.load_path.GetMyContextFromRoot(context))
+        weighing = {"weighed": None if not estimate.ready else round(estimate.parts, 3),
+                    "held": int(count[0]), "resting": int(count[1])}
+        rig.episode.simulator.AdvanceTo(context.get_time() + 0.01)
     while len(records := picks.Eval(context)) <= grasps_before:
         if mode.Eval(context) in (Mode.DONE, Mode.STOPPED) \
                 or context.get_time() > saved.get_time() + GRASP_LIMIT:
-            return {"end": "no record", "slip_mm": round(1e3 * slip, 2)}
+            return {"end": "no record", "in_pads": len(in_pads),
+                    "dropped_from_pads": len(in_pads - kept), "slip_mm": round(1e3 * slip, 2)}
         rig.episode.simulator.AdvanceTo(context.get_time() + 0.05)
     record = records[grasps_before]
     # What the grasp released is in the tray once it has landed.
     rig.episode.simulator.AdvanceTo(context.get_time() + 0.5)
     return {"end": record.disposition.name if record.disposition else record.outcome.name,
             "landed": _tray_count(rig, context) - tray,
-            "recoveries": [r.name for r in record.recoveries],
+            "recoveries": [r.name for r in record.recoveries], "after_shake": weighing,
+            "in_pads": len(in_pads), "dropped_from_pads": len(in_pads - kept),
             "slip_mm": round(1e3 * slip, 2), "wall_s": round(time.perf_counter() - wall, 1)}
 
 
@@ -178,13 +207,19 @@ def report(piles: list[dict]) -> None:
                       for r in rows)
         low, high = wilson(ok, n)
         agree = sum(_success(r[name]) == _success(r["model"]) for r in rows)
-        slips = np.array([r[name]["slip_mm"] for r in rows])
+        slips = np.array([r[name]["slip_mm"] for r in rows if "in_pads" in r[name]])
+        slips = slips[np.isfinite(slips)]
+        slip = (f"slip of the parts kept in the pads over {len(slips)} shakes: median "
+                f"{np.median(slips):.2f} mm, max {slips.max():.2f} mm, > 2 mm in "
+                f"{int((slips > 2).sum())}") if len(slips) else "no slip measured"
         ends = Counter(r[name]["end"] for r in rows)
         print(f"  {name}: shake left one part, delivered: {ok}/{n} = {100 * ok / n:.1f} % "
               f"[{100 * low:.1f}, {100 * high:.1f}]; several delivered {several}; "
-              f"agrees with the model's physics {agree}/{n}; ends {dict(ends)}; "
-              f"target slip median {np.median(slips):.2f} mm, max {slips.max():.2f} mm, "
-              f"> 2 mm in {int((slips > 2).sum())}")
+              f"agrees with the model's physics {agree}/{n}; ends {dict(ends)}; {slip}")
+        for r in rows:
+            if r[name]["end"] == "DELIVERED" and r[name].get("landed", 0) > 1:
+                print(f"    several delivered: {r[name]['landed']} landed, the weighing after "
+                      f"the shake {r[name].get('after_shake', 'not recorded')}")
 
 
 def main() -> int:

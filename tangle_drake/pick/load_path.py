@@ -42,6 +42,11 @@ class LoadPathMonitor(LeafSystem):
             "contact_results", AbstractValue.Make(ContactResults()))
         self.DeclareVectorOutputPort("held_count", 2, self._calc_count)
 
+    @property
+    def gripper_bodies(self) -> frozenset[int]:
+        """Body indices of the gripper's model."""
+        return self._gripper
+
     def touching(self, results: ContactResults) -> dict[int, set[int]]:
         """Body index -> body indices it touches, from point and hydroelastic contacts."""
         pairs = [(int(info.bodyA_index()), int(info.bodyB_index()))
