@@ -84,12 +84,20 @@ def _rig(scenario: Scenario, method: Method, part: str) -> _Rig:
                 episode.context.Clone())
 
 
-def _resume(rig: _Rig, saved: Context, run: MethodRun, friction: float) -> None:
+def _resume(rig: _Rig, base: _Rig, saved: Context, run: MethodRun, friction: float) -> None:
     """Put ``rig``'s simulator at the saved instant (no initialization events: the planner
     is mid-grasp), its method input fixed, every friction times ``friction``."""
     context = rig.episode.context
     context.SetTimeStateAndParametersFrom(saved)
-    context.get_mutable_parameters().SetFrom(rig.own.get_parameters())
+    if rig is not base:
+        # Another diagram: its own geometry (SceneGraph's parameters), and its own plant's
+        # sampled outputs (abstract state naming the other plant's geometry ids; they are
+        # what the last step's contacts were, remade at the next step).
+        context.get_mutable_parameters().SetFrom(rig.own.get_parameters())
+        plant = rig.episode.pick.station.plant
+        mine, own = plant.GetMyMutableContextFromRoot(context), plant.GetMyContextFromRoot(rig.own)
+        for i in range(mine.num_abstract_states()):
+            mine.get_mutable_abstract_state(i).SetFrom(own.get_abstract_state(i))
     rig.episode.pick.diagram.GetInputPort("method").FixValue(context, run)
     rig.contacts.apply(context, friction)
     rig.episode.simulator.Initialize(InitializeParams(suppress_initialization_events=True))
@@ -120,14 +128,15 @@ def _tray_count(rig: _Rig, context: Context) -> int:
     return round(tray.GetOutputPort("tray_count").Eval(tray.GetMyContextFromRoot(context))[0])
 
 
-def _finish_grasp(rig: _Rig, saved: Context, run: MethodRun, friction: float,
+def _finish_grasp(rig: _Rig, base: _Rig, saved: Context, run: MethodRun, friction: float,
                   grasps_before: int) -> dict:
-    """From a saved shake, finish the grasp; what it did, and how far the part nearest the
-    gripper moved in the gripper's frame over the shake."""
-    _resume(rig, saved, run, friction)
+    """From a saved shake (a context of ``base``'s diagram), finish the grasp on ``rig``:
+    what it did, what the weighing after the shake read, and how far the parts the pads kept
+    moved in the gripper's frame over the shake."""
+    _resume(rig, base, saved, run, friction)
     context = rig.episode.context
-    before = _gripper_frame_positions(rig, context)
-    in_pads = _in_pads(rig, context)
+    before = _gripper_frame_positions(base, saved)
+    in_pads = _in_pads(base, saved)
     tray = _tray_count(rig, context)
     wall = time.perf_counter()
     rig.episode.run(GRASP_LIMIT, pause_at=Mode.WEIGH)  # the shake is over
@@ -181,9 +190,9 @@ def run_pile(rigs: dict[str, _Rig], settler: PileSettler, part: str, seed: int,
         row = {"grasp": grasps, "t": round(saved.get_time(), 3)}
         for name, (friction, fine) in VARIANTS.items():
             if name != "model":
-                row[name] = _finish_grasp(rigs["fine" if fine else "model"], saved, run,
-                                          friction, grasps)
-        row["model"] = _finish_grasp(base, saved, run, 1.0, grasps)  # goes on from here
+                row[name] = _finish_grasp(rigs["fine" if fine else "model"], base, saved,
+                                          run, friction, grasps)
+        row["model"] = _finish_grasp(base, base, saved, run, 1.0, grasps)  # goes on from here
         shakes.append(row)
         print(f"  {part} pile {seed}: shake {len(shakes)}: "
               + ", ".join(f"{n} {row[n]['end']}/{row[n].get('landed')}" for n in VARIANTS),
