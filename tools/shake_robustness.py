@@ -42,7 +42,7 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.pick.diagram import build_pick_diagram, closed_loop_settings
 from tangle_drake.pick.episode import PickEpisode, RunEnd
-from tangle_drake.pick.load_path import LoadPathMonitor
+from tangle_drake.pick.load_path import GRIPPER_BODY, LoadPathMonitor
 from tangle_drake.pick.planner import Mode
 from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler
@@ -59,6 +59,9 @@ GRASP_LIMIT = 20.0
 """Simulated seconds a grasp may take from its shake to its record, s."""
 SIM_LIMIT_PER_PART = 40.0
 """Simulated seconds a clearing may take per part in the pile, s."""
+STEP = 0.01
+"""Simulated seconds between looks at the planner's mode, s: shorter than any mode lasts
+(a weighing can take 0.2 s), so a pause at a mode never runs past it."""
 
 
 @dataclass
@@ -68,8 +71,9 @@ class _Rig:
     load_path: LoadPathMonitor
     """The simulation's count of what the gripper holds up, and what of it rests on the pile."""
     own: Context
-    """A context of this rig's diagram, for its own parameters: SceneGraph keeps geometry in
-    them, named by ids that another diagram's context does not know."""
+    """A context of this rig's diagram, for what a context copied from another diagram must
+    not bring: SceneGraph's geometry (its parameters) and the plant's sampled outputs (its
+    abstract state), both named by ids this diagram does not know."""
 
 
 def _rig(scenario: Scenario, method: Method, part: str) -> _Rig:
@@ -103,11 +107,15 @@ def _resume(rig: _Rig, base: _Rig, saved: Context, run: MethodRun, friction: flo
     rig.episode.simulator.Initialize(InitializeParams(suppress_initialization_events=True))
 
 
+def _step(mode: Mode) -> float:
+    return STEP
+
+
 def _gripper_frame_positions(rig: _Rig, context: Context) -> np.ndarray:
     """The pile's part origins in the gripper's frame, (N, 3) m."""
     station = rig.episode.pick.station
     plant = station.plant
-    X_WG = plant.GetBodyByName("gripper_base").EvalPoseInWorld(station.plant_context(context))
+    X_WG = plant.GetBodyByName(GRIPPER_BODY).EvalPoseInWorld(station.plant_context(context))
     poses = station.part_poses(context)
     return (X_WG.inverse().GetAsMatrix4() @ np.c_[poses[:, :3, 3],
                                                   np.ones(len(poses))].T).T[:, :3]
@@ -139,7 +147,7 @@ def _finish_grasp(rig: _Rig, base: _Rig, saved: Context, run: MethodRun, frictio
     in_pads = _in_pads(base, saved)
     tray = _tray_count(rig, context)
     wall = time.perf_counter()
-    rig.episode.run(GRASP_LIMIT, pause_at=Mode.WEIGH)  # the shake is over
+    rig.episode.run(GRASP_LIMIT, pause_at=Mode.WEIGH, step=_step)  # the shake is over
     kept = in_pads & _in_pads(rig, context)
     moved = np.linalg.norm(_gripper_frame_positions(rig, context) - before, axis=1)
     slip = float(max((moved[i] for i in kept), default=float("nan")))
@@ -153,7 +161,7 @@ def _finish_grasp(rig: _Rig, base: _Rig, saved: Context, run: MethodRun, frictio
         count = held.Eval(rig.load_path.GetMyContextFromRoot(context))
         weighing = {"weighed": None if not estimate.ready else round(estimate.parts, 3),
                     "held": int(count[0]), "resting": int(count[1])}
-        rig.episode.simulator.AdvanceTo(context.get_time() + 0.01)
+        rig.episode.simulator.AdvanceTo(context.get_time() + STEP)
     while len(records := picks.Eval(context)) <= grasps_before:
         if mode.Eval(context) in (Mode.DONE, Mode.STOPPED) \
                 or context.get_time() > saved.get_time() + GRASP_LIMIT:
@@ -182,7 +190,8 @@ def run_pile(rigs: dict[str, _Rig], settler: PileSettler, part: str, seed: int,
     limit = SIM_LIMIT_PER_PART * settled.report.num_in_bin
     shakes = []
     while len(shakes) < max_shakes:
-        result = episode.run(limit - episode.context.get_time(), pause_at=Mode.SHAKE)
+        result = episode.run(limit - episode.context.get_time(), pause_at=Mode.SHAKE,
+                             step=_step)
         if result.end is not RunEnd.PAUSED:
             break
         saved = episode.context.Clone()

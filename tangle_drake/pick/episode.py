@@ -66,7 +66,9 @@ def run_picks(clock: Clock, pick: PickDiagram, time_limit: float, *,
     ``time_limit`` simulated seconds have passed, or it enters ``pause_at``.
 
     ``on_pick`` is called with each pick as it ends; ``step`` says how far to advance next
-    given the planner's mode (default :data:`POLL`).
+    given the planner's mode (default :data:`POLL`). The mode is looked at only between
+    steps, so to pause at a mode that can be shorter than a step (a weighing), pass a
+    shorter ``step``.
     """
     context = clock.get_context()
     mode_port = pick.diagram.GetOutputPort("mode")
