@@ -36,17 +36,15 @@ import numpy as np
 from pydrake.systems.analysis import InitializeParams
 from pydrake.systems.framework import Context
 
-from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
+from tangle_drake.bench.clearing import clearing_diagram, tray_count
+from tangle_drake.bench.methods import Method, MethodRun
 from tangle_drake.bench.stats import wilson
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import diagrams_dir
-from tangle_drake.pick.diagram import build_pick_diagram, closed_loop_settings
 from tangle_drake.pick.episode import PickEpisode, RunEnd
 from tangle_drake.pick.load_path import GRIPPER_BODY, LoadPathMonitor
 from tangle_drake.pick.planner import Mode
-from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler
-from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario, load_scenario
 from tangle_drake.station import build_station
 from tangle_drake.tangle_data.perturb import ContactScaler
@@ -77,11 +75,7 @@ class _Rig:
 
 
 def _rig(scenario: Scenario, method: Method, part: str) -> _Rig:
-    pick = build_pick_diagram(
-        scenario, TangleChoice(None, FALLBACK_RULE), motion_for(scenario),
-        station=build_station(scenario),
-        settings=closed_loop_settings(scenario, max_picks=scenario.pile.total_count),
-        selection=selection_wiring([method], part, scenario))
+    pick = clearing_diagram(scenario, [method], part)
     episode = PickEpisode(pick)
     return _Rig(episode, ContactScaler(pick.station.plant, pick.station.scene_graph),
                 pick.diagram.GetSubsystemByName("load_path_monitor (sim only)"),
@@ -131,11 +125,6 @@ def _in_pads(rig: _Rig, context: Context) -> set[int]:
     return {i for i, body in enumerate(pile) if touching.get(body, set()) & gripper}
 
 
-def _tray_count(rig: _Rig, context: Context) -> int:
-    tray = rig.episode.pick.tray
-    return round(tray.GetOutputPort("tray_count").Eval(tray.GetMyContextFromRoot(context))[0])
-
-
 def _finish_grasp(rig: _Rig, base: _Rig, saved: Context, run: MethodRun, friction: float,
                   grasps_before: int) -> dict:
     """From a saved shake (a context of ``base``'s diagram), finish the grasp on ``rig``:
@@ -145,7 +134,7 @@ def _finish_grasp(rig: _Rig, base: _Rig, saved: Context, run: MethodRun, frictio
     context = rig.episode.context
     before = _gripper_frame_positions(base, saved)
     in_pads = _in_pads(base, saved)
-    tray = _tray_count(rig, context)
+    tray = tray_count(rig.episode.pick, context)
     wall = time.perf_counter()
     rig.episode.run(GRASP_LIMIT, pause_at=Mode.WEIGH, step=_step)  # the shake is over
     kept = in_pads & _in_pads(rig, context)
@@ -172,7 +161,7 @@ def _finish_grasp(rig: _Rig, base: _Rig, saved: Context, run: MethodRun, frictio
     # What the grasp released is in the tray once it has landed.
     rig.episode.simulator.AdvanceTo(context.get_time() + 0.5)
     return {"end": record.disposition.name if record.disposition else record.outcome.name,
-            "landed": _tray_count(rig, context) - tray,
+            "landed": tray_count(rig.episode.pick, context) - tray,
             "recoveries": [r.name for r in record.recoveries], "after_shake": weighing,
             "in_pads": len(in_pads), "dropped_from_pads": len(in_pads - kept),
             "slip_mm": round(1e3 * slip, 2), "wall_s": round(time.perf_counter() - wall, 1)}

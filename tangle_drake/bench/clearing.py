@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -21,12 +22,18 @@ from pydrake.systems.framework import Context
 from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
 from tangle_drake.bench.trials import BenchConfig, PartSpec, method_seed, part_scenario, pile_seed
 from tangle_drake.bin_model import inside_bin
-from tangle_drake.pick.diagram import build_pick_diagram, closed_loop_settings, pick_settings
+from tangle_drake.pick.diagram import (
+    PickDiagram,
+    build_pick_diagram,
+    closed_loop_settings,
+    pick_settings,
+)
 from tangle_drake.pick.episode import PickEpisode
 from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler
 from tangle_drake.planning.motions import motion_for
+from tangle_drake.scenario import Scenario
 from tangle_drake.station import build_station
 
 SIM_TIME_PER_PART = 40.0
@@ -69,13 +76,7 @@ class ClearWorker:
         if spec.name not in self._rigs:
             scenario = part_scenario(self.config, spec)
             methods = self.config.methods[spec.name]
-            count = scenario.pile.total_count
-            settings = pick_settings(scenario, max_picks=2 * count) if self.config.open_loop \
-                else closed_loop_settings(scenario, max_picks=count)
-            pick = build_pick_diagram(
-                scenario, TangleChoice(None, FALLBACK_RULE), motion_for(scenario),
-                station=build_station(scenario), settings=settings,
-                selection=selection_wiring(methods, spec.name, scenario))
+            pick = clearing_diagram(scenario, methods, spec.name, self.config.open_loop)
             self._rigs[spec.name] = _Rig(PileSettler(build_station(scenario), scenario),
                                          PickEpisode(pick), scenario,
                                          {m.name: m for m in methods})
@@ -90,12 +91,8 @@ class ClearWorker:
         rows: list[dict] = []
         tray = [0]
 
-        def tray_count(context: Context) -> int:
-            return round(pick.tray.GetOutputPort("tray_count").Eval(
-                pick.tray.GetMyContextFromRoot(context))[0])
-
         def grasp(record: PickRecord) -> None:
-            now = tray_count(episode.simulator.get_context())
+            now = tray_count(pick, episode.simulator.get_context())
             rows.append(grasp_row(record, now - tray[0]))
             tray[0] = now
 
@@ -103,7 +100,7 @@ class ClearWorker:
         # Parts still falling into the tray after the last grasp was recorded come to rest.
         episode.simulator.AdvanceTo(episode.simulator.get_context().get_time() + 1.0)
         context = episode.simulator.get_context()
-        final = tray_count(context)
+        final = tray_count(pick, context)
         if rows:  # what landed after the last record belongs to it
             rows[-1]["landed"] += final - tray[0]
         positions = pick.station.part_poses(context)[:, :3, 3]
@@ -112,6 +109,25 @@ class ClearWorker:
                 "compute_s": sum(r["compute_s"] for r in rows), "grasps": rows,
                 "delivered": final, "left_in_bin": left, "lost": in_bin - left - final,
                 "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
+
+
+def clearing_diagram(scenario: Scenario, methods: Sequence[Method], part: str,
+                     open_loop: bool = False) -> PickDiagram:
+    """The pick diagram that clears a bin of ``scenario``: closed loop (at most one delivery
+    per part in the pile) or open loop (two grasps per part)."""
+    count = scenario.pile.total_count
+    settings = pick_settings(scenario, max_picks=2 * count) if open_loop \
+        else closed_loop_settings(scenario, max_picks=count)
+    return build_pick_diagram(
+        scenario, TangleChoice(None, FALLBACK_RULE), motion_for(scenario),
+        station=build_station(scenario), settings=settings,
+        selection=selection_wiring(methods, part, scenario))
+
+
+def tray_count(pick: PickDiagram, context: Context) -> int:
+    """The parts lying in the tray now, by the simulation (``context``: the diagram's)."""
+    return round(pick.tray.GetOutputPort("tray_count").Eval(
+        pick.tray.GetMyContextFromRoot(context))[0])
 
 
 def grasp_row(record: PickRecord, landed: int) -> dict:
