@@ -15,6 +15,8 @@ import pytest
 import torch
 from pydrake.math import RigidTransform
 
+from tangle_drake.bench.clear_report import figures
+from tangle_drake.bench.clearing import EscapeWatch
 from tangle_drake.bench.gallery import GALLERY, INDEX, TILE_KEY, tile_path
 from tangle_drake.bench.methods import MethodRun, MethodSelector
 from tangle_drake.bench.report import terminal_summary
@@ -26,10 +28,11 @@ from tangle_drake.crops import CropSpec
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.paths import diagrams_dir
+from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, classify_lift
 from tangle_drake.pick.selection import RuleSelector
 from tangle_drake.pile import PileSettler
-from tangle_drake.scenario import PartCount
+from tangle_drake.scenario import BinConfig, PartCount
 from tangle_drake.scenario_files import resolve_scenario
 from tangle_drake.station import build_station, part_bodies
 from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, save_atomic
@@ -387,6 +390,7 @@ def test_clearing_a_quick_bin_counts_what_landed_in_the_tray(tmp_path, capsys):
     assert run["method"] == "graspability" and trial["pile"]["parts"] == 2
     assert run["delivered"] + run["left_in_bin"] + run["lost"] == trial["pile"]["in_bin"]
     assert sum(g["landed"] for g in run["grasps"]) == run["delivered"]
+    assert len(run["escapes"]) <= run["lost"]
     assert all(g["weighed"] is not None or g["disposition"] in ("EMPTY", None)
                for g in run["grasps"])  # closed loop: every held lift was weighed
     for g in run["grasps"]:  # the load path's truth: a part that landed was held up
@@ -396,6 +400,7 @@ def test_clearing_a_quick_bin_counts_what_landed_in_the_tray(tmp_path, capsys):
     figures = summary["overall"]["graspability"]
     assert figures["delivered"] == run["delivered"] and figures["bins"] == 1
     assert figures["parts_per_hour"] > 0
+    assert sum(figures["lost_by_mode"].values()) == run["lost"]
     assert "exactly one part" in (out / "clear_report.md").read_text()
     assert "graspability: delivered" in capsys.readouterr().out
     # The same command again resumes: nothing to run.
@@ -404,6 +409,40 @@ def test_clearing_a_quick_bin_counts_what_landed_in_the_tray(tmp_path, capsys):
     with pytest.raises(TangleDrakeError, match="other settings"):  # open loop is another run
         run_bench(BenchOptions(clear=True, open_loop=True, quick=True, workers=1, out=out,
                                show_progress=False))
+
+
+def test_the_escape_watch_names_the_mode_a_lost_part_left_the_bin_in():
+    bin_config = BinConfig()  # centred at (0.34, 0.22), floor at 0.93
+    inside, tray_xy = [0.34, 0.22, 0.95], [0.34, 0.60]
+    poses = np.tile(np.eye(4), (3, 1, 1))
+    pick = SimpleNamespace(
+        station=SimpleNamespace(part_poses=lambda context: poses.copy()),
+        tray=SimpleNamespace(in_tray=lambda p: np.linalg.norm(p[..., :2] - tray_xy, axis=-1)
+                             < 0.1))
+    grasps: list[dict] = []
+    watch = EscapeWatch(pick, bin_config, None, grasps)
+    poses[:, :3, 3] = inside
+    assert watch(Mode.LIFT) > 0 and watch.escapes == []
+    grasps.append({})  # one grasp recorded; the next one shakes
+    watch(Mode.SHAKE)
+    poses[1, :3, 3] = [0.34, 0.45, 0.40]  # flung past the wall during the shake, falling
+    poses[2, :3, 3] = [0.34, 0.20, 1.20]  # held high above the bin: not lost
+    watch(Mode.TRANSFER)  # seen at the look after the shake's interval
+    assert watch.escapes == [{"grasp": 1, "mode": "shake", "part": 1}]
+    poses[1, :3, 3] = [0.34, 0.45, 0.01]  # on the ground: the same escape, counted once
+    poses[2, :3, 3] = [*tray_xy, 0.89]  # released into the tray (below the bin's floor)
+    watch(Mode.HOME)
+    assert len(watch.escapes) == 1
+
+
+def test_lost_parts_are_reported_by_the_mode_they_left_the_bin_in():
+    runs = [{"method": "m", "grasps": [], "delivered": 3, "left_in_bin": 0, "lost": 3,
+             "sim_s": 10.0, "compute_s": 1.0,
+             "escapes": [{"grasp": 0, "mode": "shake", "part": 1},
+                         {"grasp": 2, "mode": "shake", "part": 4}]},
+            {"method": "m", "grasps": [], "delivered": 5, "left_in_bin": 0, "lost": 1,
+             "sim_s": 10.0, "compute_s": 1.0}]  # a run made before escapes were recorded
+    assert figures(runs)["lost_by_mode"] == {"shake": 2, "unseen": 2}
 
 
 def test_open_loop_goes_with_clear():

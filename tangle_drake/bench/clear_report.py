@@ -5,15 +5,16 @@ Per method and part, and per method over all parts: parts delivered to the tray;
 part and with several; several read as one (delivered on the estimator's "one part" while
 several came up, were held up through contacts at the weighing, or landed); weighings made
 while a held part still rested on the pile (the wrist then reads light); grasps per delivered
-part; shakes and put-backs; parts left in the bin and lost (in neither bin nor tray); the share
-of the bin cleared; delivered parts per hour of simulated time plus computation. Rates come
-with 95 % bootstrap intervals over bins.
+part; shakes and put-backs; parts left in the bin and lost (in neither bin nor tray, by the
+planner's mode when they left the bin); the share of the bin cleared; delivered parts per hour
+of simulated time plus computation. Rates come with 95 % bootstrap intervals over bins.
 """
 
 from __future__ import annotations
 
 import csv
 import json
+from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -48,7 +49,18 @@ def _counts(runs: Sequence[dict]) -> dict:
         "gave_up": sum(g["failure"] == "gave up" for g in grasps),
         "left_in_bin": sum(run["left_in_bin"] for run in runs),
         "lost": sum(run["lost"] for run in runs), "hours": hours,
+        "lost_by_mode": _lost_by_mode(runs),
     }
+
+
+def _lost_by_mode(runs: Sequence[dict]) -> dict[str, int]:
+    """Lost parts by the planner's mode when they left the bin; ``unseen``: lost, but never
+    seen falling (or from a run made before escapes were recorded)."""
+    modes = Counter(e["mode"] for run in runs for e in run.get("escapes", []))
+    unseen = sum(run["lost"] - len(run.get("escapes", [])) for run in runs)
+    if unseen:
+        modes["unseen"] = unseen
+    return dict(modes.most_common())
 
 
 def _rates(c: dict) -> dict:
@@ -120,6 +132,15 @@ _HEADER = ["| method | bins | delivered / parts (cleared) | deliveries | exactly
            "|---" * 14 + "|"]
 
 
+def _lost_lines(by_method: dict, methods: Sequence[str]) -> list[str]:
+    """Where each method's lost parts left the bin (the planner's mode), if any were lost."""
+    lines = [f"- {m}: " + ", ".join(f"{mode} {n}" for mode, n in
+                                    by_method[m]["lost_by_mode"].items())
+             for m in methods if by_method[m]["lost_by_mode"]]
+    return ["", "Lost parts, by the planner's mode when they left the bin:", "", *lines] \
+        if lines else []
+
+
 def write_clear_report(directory: Path, trials: Sequence[dict], summary: dict,
                        parts: Sequence[str], methods: Sequence[str]) -> list[Path]:
     """``clear_report.md``, ``clear_summary.json`` and ``clear_grasps.csv`` in ``directory``."""
@@ -133,9 +154,11 @@ def write_clear_report(directory: Path, trials: Sequence[dict], summary: dict,
              "weighing came while a held part still touched the pile.", "",
              "## All parts", "", *_HEADER,
              *[_row(m, summary["overall"][m]) for m in methods]]
+    lines += _lost_lines(summary["overall"], methods)
     for part in parts:
         lines += ["", f"## {part}", "", *_HEADER,
                   *[_row(m, summary["by_part"][part][m]) for m in methods]]
+        lines += _lost_lines(summary["by_part"][part], methods)
     for note in summary.get("notes", []):
         lines += ["", f"Note: {note}"]
     report = directory / "clear_report.md"

@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 from pydrake.systems.framework import Context
 
 from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
@@ -28,12 +29,13 @@ from tangle_drake.pick.diagram import (
     closed_loop_settings,
     pick_settings,
 )
-from tangle_drake.pick.episode import PickEpisode
+from tangle_drake.pick.episode import POLL, PickEpisode
+from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler
 from tangle_drake.planning.motions import motion_for
-from tangle_drake.scenario import Scenario
+from tangle_drake.scenario import BinConfig, Scenario
 from tangle_drake.station import build_station
 
 SIM_TIME_PER_PART = 40.0
@@ -96,19 +98,57 @@ class ClearWorker:
             rows.append(grasp_row(record, now - tray[0]))
             tray[0] = now
 
-        result = episode.run(SIM_TIME_PER_PART * max(in_bin, 1), on_pick=grasp)
+        watch = EscapeWatch(pick, rig.scenario.bin, episode.simulator.get_context(), rows)
+        result = episode.run(SIM_TIME_PER_PART * max(in_bin, 1), on_pick=grasp, step=watch)
         # Parts still falling into the tray after the last grasp was recorded come to rest.
         episode.simulator.AdvanceTo(episode.simulator.get_context().get_time() + 1.0)
+        watch(Mode.DONE)
         context = episode.simulator.get_context()
         final = tray_count(pick, context)
         if rows:  # what landed after the last record belongs to it
             rows[-1]["landed"] += final - tray[0]
         positions = pick.station.part_poses(context)[:, :3, 3]
-        left = int(inside_bin(rig.scenario.bin, positions).sum())
+        inside = inside_bin(rig.scenario.bin, positions)
+        left = int(inside.sum())
+        lost = set(np.flatnonzero(~inside & ~pick.tray.in_tray(positions)).tolist())
         return {"method": run.name, "end": result.end.value, "sim_s": round(result.time, 3),
                 "compute_s": sum(r["compute_s"] for r in rows), "grasps": rows,
                 "delivered": final, "left_in_bin": left, "lost": in_bin - left - final,
+                "escapes": [e for e in watch.escapes if e["part"] in lost],
                 "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
+
+
+class EscapeWatch:
+    """Between the run's looks at the planner (a ``step`` of :func:`run_picks`), notes each
+    part that has left the bin for somewhere other than the tray, and the planner's mode at
+    the look before: where a clearing's lost parts go.
+
+    A part counts once it is outside the bin's footprint, not in the tray, and below the bin's
+    floor (falling past it to the ground: a part in the gripper is above the bin, one being
+    released over the tray is the tray's).
+    """
+
+    def __init__(self, pick: PickDiagram, bin_config: BinConfig, context: Context,
+                 grasps: list[dict]) -> None:
+        self._pick, self._bin, self._context, self._grasps = pick, bin_config, context, grasps
+        self._seen: set[int] = set()
+        self._mode: Mode | None = None
+        self.escapes: list[dict] = []
+        """One per escaped part: ``grasp`` (the index of the grasp in progress, that is the
+        number recorded before it), ``mode`` (the planner's mode when it left), ``part``."""
+
+    def __call__(self, mode: Mode) -> float:
+        positions = self._pick.station.part_poses(self._context)[:, :3, 3]
+        out = ~inside_bin(self._bin, positions) & ~self._pick.tray.in_tray(positions) \
+            & (positions[:, 2] < self._bin.floor_height)
+        for part in np.flatnonzero(out):
+            if int(part) not in self._seen:
+                self._seen.add(int(part))
+                left_in = self._mode if self._mode is not None else mode
+                self.escapes.append({"grasp": len(self._grasps), "mode": left_in.value,
+                                     "part": int(part)})
+        self._mode = mode
+        return POLL
 
 
 def clearing_diagram(scenario: Scenario, methods: Sequence[Method], part: str,

@@ -228,12 +228,15 @@ class TrayMonitor(LeafSystem):
             "body_poses", plant.get_body_poses_output_port().Allocate())
         self.DeclareVectorOutputPort("tray_count", 1, self._calc_count)
 
+    def in_tray(self, p_W: np.ndarray) -> np.ndarray:
+        """Whether parts' centres of mass at world point(s) (..., 3) count as in the tray."""
+        p_W = np.asarray(p_W, float)
+        return inside_bin(self._tray, p_W, margin=-self._reach) & (p_W[..., 2] < self._top)
+
     def parts_in_tray(self, context: Context) -> list[int]:
         """Body indices of the parts in the tray now."""
         poses = self._poses.Eval(context)
-        return [i for i in self._parts
-                if inside_bin(self._tray, poses[i].translation(), margin=-self._reach)
-                and poses[i].translation()[2] < self._top]
+        return [i for i in self._parts if self.in_tray(poses[i].translation())]
 
     def _calc_count(self, context: Context, output: BasicVector) -> None:
         output.SetAtIndex(0, float(len(self.parts_in_tray(context))))
