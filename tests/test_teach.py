@@ -141,3 +141,63 @@ def test_the_command_refuses_a_bad_mesh_with_its_reason(meshes, tmp_path, capsys
     printed = capsys.readouterr().out
     assert "refused: " in printed and "encloses no volume" in printed
     assert "encloses no volume" in (tmp_path / "sheet" / "check.txt").read_text()
+
+
+def test_the_check_of_a_built_in_part_reads_its_wire():
+    check = check_part("u_hook", 1.0, SCENARIO)
+    assert check.accepted and check.mass_from == "wire" and check.watertight
+    assert max(check.size_m) == pytest.approx(0.070, abs=2e-3)
+    assert check.pieces == len(wire.capsules(catalog.builtin_spec("u_hook")))
+    assert 1.0 < check.pieces_volume_ratio < 1.3  # capsules overlap at their joints
+    assert check.lines()[0].startswith("built-in part u_hook")
+
+
+def test_teaching_a_built_in_part_makes_the_shipped_recipes_labels_and_weights(tmp_path,
+                                                                              monkeypatch):
+    """One way to make a model: ``teach u_hook`` collects what ``collect --part u_hook`` does
+    and trains what ``train`` on it does with the shipped models' one thread."""
+    import torch
+
+    from tangle_drake.dataset import load_samples
+    from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
+    from tangle_drake.tangle_cnn.train import TrainSettings, train
+
+    settings = TeachSettings("u_hook", samples=10, epochs=1, validation_fraction=0.3)
+    out = tmp_path / "taught"
+
+    def stop_after_train(stage: str) -> None:
+        if stage == "train":
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(pipeline, "AFTER_STAGE", stop_after_train)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(2)  # teach pins the training's threads whatever the process has
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            Teacher(settings, out, workers=1, say=lambda line: None).run()
+    finally:
+        torch.set_num_threads(threads)
+    assert not (out / "part.json").exists()  # a built-in needs no part file
+    data = tmp_path / "collected"
+    assert run_command("collect", "--part", "u_hook", "--samples", "10", "--out", str(data),
+                       "--seed", "0", "--workers", "1") == 0
+    taught, collected = load_samples(out / "data"), load_samples(data)
+    assert taught.keys() == collected.keys()
+    for name in taught:
+        np.testing.assert_array_equal(taught[name], collected[name], err_msg=name)
+    torch.set_num_threads(1)
+    try:
+        train(data, tmp_path / "trained.pt", TrainSettings(epochs=1, seed=0,
+                                                          validation_fraction=0.3),
+              device="cpu", log=lambda line: None)
+    finally:
+        torch.set_num_threads(threads)
+    mine = read_checkpoint(out / "model.pt")["state_dict"]
+    theirs = read_checkpoint(tmp_path / "trained.pt")["state_dict"]
+    assert mine.keys() == theirs.keys()
+    assert all(torch.equal(mine[k], theirs[k]) for k in mine)
+
+
+def test_a_built_in_part_takes_no_mesh_scale_or_mass(tmp_path):
+    with pytest.raises(TangleDrakeError, match="built-in part, with its own size and mass"):
+        Teacher(TeachSettings("c_ring", mesh_scale=0.001), tmp_path / "ring")

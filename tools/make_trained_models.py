@@ -38,6 +38,7 @@ from tangle_drake.parts.catalog import BUILTIN_PARTS
 from tangle_drake.pick.selection import TRAINED_DIR
 from tangle_drake.tangle_cnn.card import TEST_HEADER, VALIDATION_HEADER, test_row, validation_row
 from tangle_drake.tangle_cnn.checkpoint import MODEL_KIND, read_checkpoint
+from tangle_drake.tangle_cnn.train_settings import TRAIN_THREADS
 
 CARD = TRAINED_DIR / "README.md"
 
@@ -45,9 +46,6 @@ TEST_SEED = 1
 """Collection seed of the test piles (the models are trained on seed 0's)."""
 
 
-TRAIN_THREADS = "1"
-"""Torch threads of the training runs: the shipped files were made with one, and another
-count gives slightly different weights."""
 
 
 def run_command(*argv: str, env: dict[str, str] | None = None) -> None:
@@ -65,7 +63,7 @@ def make_model(part: str, samples: int, data: Path, work: Path, workers: int) ->
                 str(data / part), "--seed", "0", "--workers", str(workers))
     checkpoint = work / f"{part}.pt"
     run_command("train", "--data", str(data / part), "--out", str(checkpoint), "--seed", "0",
-                env={"OMP_NUM_THREADS": TRAIN_THREADS})
+                env={"OMP_NUM_THREADS": str(TRAIN_THREADS)})
     TRAINED_DIR.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(checkpoint, TRAINED_DIR / f"{part}.pt")
     print(f"installed {TRAINED_DIR / part}.pt", flush=True)
@@ -94,7 +92,7 @@ def test_model(part: str, samples: int, data: Path, work: Path, workers: int) ->
     model = TRAINED_DIR / f"{part}.pt"
     figures = work / f"{part}.test.json"
     run_command("evaluate", "--data", str(test_data), "--model", str(model), "--json",
-                str(figures), env={"OMP_NUM_THREADS": TRAIN_THREADS})
+                str(figures), env={"OMP_NUM_THREADS": str(TRAIN_THREADS)})
     record = {"weights_sha256": weights_sha256(model), "seed": TEST_SEED,
               "evaluation": json.loads(figures.read_text())}
     test_path(part).write_text(json.dumps(record, indent=1) + "\n")

@@ -19,7 +19,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "--out the part file, the model (.pt, and .onnx with the onnx extra), its "
                     "card and the benchmark's report. Ctrl-C, then the same command, resumes "
                     "at the stage and sample where it stopped.")
-    parser.add_argument("mesh", type=Path, help="the part's mesh (.stl, .ply, .obj)")
+    parser.add_argument("mesh", type=Path,
+                        help="the part's mesh (.stl, .ply, .obj), or a built-in part's name "
+                             "(made by the shipped models' recipe: the same labels and "
+                             "training give the same weights)")
     parser.add_argument("--mesh-scale", type=float, default=1.0, metavar="S",
                         help="metres per mesh unit (0.001 for millimetres; default 1)")
     parser.add_argument("--mass", type=float, default=None, metavar="KG",

@@ -8,6 +8,11 @@ from dataclasses import dataclass
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.objectives import DEFAULT_OBJECTIVE, objective_named
 
+TRAIN_THREADS = 1
+"""Torch threads of the runs that make models to keep (the shipped ones, ``teach``'s): another
+count sums in another order and gives slightly different weights, so one count makes the same
+model on every machine."""
+
 AUGMENTATIONS: dict[str, int] = {"d4": 8, "none": 1}
 """Augmentation name -> number of transforms (transform ids 0..n-1)."""
 

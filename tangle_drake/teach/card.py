@@ -10,8 +10,9 @@ from pathlib import Path
 from tangle_drake.tangle_cnn.card import TEST_HEADER, VALIDATION_HEADER, test_row, validation_row
 
 
-def write_card(out: Path) -> Path:
-    """Write ``out/card.md`` from the run's files; its path."""
+def write_card(out: Path, part: str = "part.json") -> Path:
+    """Write ``out/card.md`` from the run's files; its path. ``part``: how commands name the
+    part (the part file in ``out``, or a built-in part's name)."""
     check = json.loads((out / "check.json").read_text())
     test = json.loads((out / "test.json").read_text())
     bench = json.loads((out / "bench" / "summary.json").read_text())
@@ -35,8 +36,8 @@ def write_card(out: Path) -> Path:
     lines += [f"{p['method_a']} − {p['method_b']}: {100 * p['difference']:+.1f} points "
               f"[{100 * p['lower']:+.1f}, {100 * p['upper']:+.1f}], McNemar p = "
               f"{p['p_value']:.2g}, over {p['n']} piles" for p in paired]
-    lines += ["", "Use it: `tangle-drake demo --part part.json --model model.pt`, "
-              "`tangle-drake bench --parts part.json --methods graspability model:model.pt` "
+    lines += ["", f"Use it: `tangle-drake demo --part {part} --model model.pt`, "
+              f"`tangle-drake bench --parts {part} --methods graspability model:model.pt` "
               "(paths in this directory).", ""]
     path = out / "card.md"
     path.write_text("\n".join(lines))

@@ -20,8 +20,10 @@ import trimesh
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
-from tangle_drake.parts import cache, load_part
+from tangle_drake.parts import BUILTIN_PARTS, cache, load_part, wire
+from tangle_drake.parts.catalog import builtin_spec
 from tangle_drake.parts.library import PART_FILE_SUFFIX, STEEL_DENSITY, read_part_file
+from tangle_drake.parts.mass import mass_properties
 from tangle_drake.parts.mesh_import import MESH_SUFFIXES
 from tangle_drake.pile import PileReport, check_pile
 from tangle_drake.scenario import PartCount, Scenario
@@ -42,7 +44,7 @@ class PartCheck:
     mass_kg: float | None = None
     mass_from: str | None = None
     """``mesh`` (a closed surface), ``voxel_fill`` or ``convex_pieces`` (a surface the repair
-    could not close), ``weighed`` (the user's ``--mass``)."""
+    could not close), ``weighed`` (the user's ``--mass``), ``wire`` (a built-in part's)."""
     inertia_kg_m2: list | None = None
     """About the centre of mass, in the mesh's axes."""
     watertight: bool | None = None
@@ -65,7 +67,8 @@ class PartCheck:
         if self.size_m is None:
             return [f"mesh {self.mesh}: refused: {self.refusal}"]
         size = " x ".join(f"{1000 * s:.1f}" for s in self.size_m)
-        lines = [f"mesh {self.mesh} ({self.name}): {size} mm",
+        what = "built-in part" if self.mass_from == "wire" else "mesh"
+        lines = [f"{what} {self.mesh} ({self.name}): {size} mm",
                  f"mass {1000 * self.mass_kg:.2f} g ({self.mass_from}); inertia diagonal "
                  + ", ".join(f"{x:.3g}" for x in np.diag(self.inertia_kg_m2)) + " kg m^2",
                  "watertight as given" if self.watertight else
@@ -83,10 +86,13 @@ class PartCheck:
         path.write_text(json.dumps(asdict(self), indent=1) + "\n")
 
 
-def check_part(mesh: Path, mesh_scale: float, scenario: Scenario,
+def check_part(mesh: Path | str, mesh_scale: float, scenario: Scenario,
                gripper: GripperSpec = DEFAULT_GRIPPER) -> PartCheck:
     """Check ``mesh`` at ``mesh_scale`` for ``scenario``'s bin and the ``gripper``; a part file
-    (its own scale; ``mesh_scale`` 1) brings the mass the user weighed."""
+    (its own scale; ``mesh_scale`` 1) brings the mass the user weighed. A built-in part's name
+    checks that part (its mass from its wire, its collisions the wire's capsules)."""
+    if str(mesh) in BUILTIN_PARTS:
+        return _check_builtin(str(mesh), mesh_scale, scenario, gripper)
     mesh = Path(mesh)
     source, weighed = mesh, None
     try:
@@ -113,9 +119,43 @@ def check_part(mesh: Path, mesh_scale: float, scenario: Scenario,
     return _refusal(check, mesh, mesh_scale, scenario, gripper)
 
 
+def _check_builtin(name: str, scale: float, scenario: Scenario,
+                   gripper: GripperSpec) -> PartCheck:
+    part = load_part(name, mesh_scale=scale)
+    surface = trimesh.load_mesh(part.visual_mesh_path, process=False)
+    pieces = collision_pieces(name, scale)
+    volume = part.mass / STEEL_DENSITY
+    ratio = sum(float(p.volume) for p in pieces) / volume
+    check = PartCheck(name, part.name, tuple(float(x) for x in surface.extents),
+                      float(part.mass), "wire", np.asarray(part.inertia).tolist(), True, 0,
+                      len(pieces), float(ratio))
+    return _refusal(check, name, scale, scenario, gripper)
+
+
+def collision_pieces(part: str | Path, mesh_scale: float = 1.0) -> list[trimesh.Trimesh]:
+    """The part's collision shapes as meshes in its body frame, for the pictures: a mesh
+    part's convex pieces, a built-in part's capsules along its wire."""
+    if str(part) not in BUILTIN_PARTS:
+        entry = load_part(part, mesh_scale=mesh_scale).sdf_path.parent
+        return [trimesh.load_mesh(p, process=False)
+                for p in sorted(entry.glob("collision_*.obj"))]
+    spec = builtin_spec(str(part)).scaled(mesh_scale)
+    com = mass_properties(wire.tube_mesh(spec), STEEL_DENSITY).com  # the body frame's origin
+    pieces = []
+    for capsule in wire.capsules(spec):
+        axis = capsule.end - capsule.start
+        piece = trimesh.creation.capsule(height=float(np.linalg.norm(axis)),
+                                         radius=capsule.radius)
+        piece.apply_transform(trimesh.geometry.align_vectors([0.0, 0.0, 1.0], axis))
+        piece.apply_translation((capsule.start + capsule.end) / 2 - com)
+        pieces.append(piece)
+    return pieces
+
+
 def part_scale(mesh: Path, mesh_scale: float) -> float:
     """The mesh's scale: a part file's own, else ``mesh_scale``."""
-    return read_part_file(mesh)[1] if mesh.suffix.lower() == PART_FILE_SUFFIX else mesh_scale
+    return read_part_file(mesh)[1] if Path(mesh).suffix.lower() == PART_FILE_SUFFIX \
+        else mesh_scale
 
 
 def _was_watertight(source: Path) -> bool:
@@ -125,7 +165,7 @@ def _was_watertight(source: Path) -> bool:
         return False
 
 
-def _refusal(check: PartCheck, source: Path, scale: float, scenario: Scenario,
+def _refusal(check: PartCheck, source: Path | str, scale: float, scenario: Scenario,
              gripper: GripperSpec) -> PartCheck:
     size = sorted(check.size_m)
     reason = None

@@ -30,9 +30,16 @@ from pathlib import Path
 import trimesh
 
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.parts import load_part
+from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.pick.selection import trained_model_path
-from tangle_drake.teach.check import PartCheck, check_part, scenario_of, settle_verdict
+from tangle_drake.tangle_cnn.train_settings import TRAIN_THREADS
+from tangle_drake.teach.check import (
+    PartCheck,
+    check_part,
+    collision_pieces,
+    scenario_of,
+    settle_verdict,
+)
 
 STAGES = ("check", "labels", "train", "test", "bench", "card")
 BUDGET_MIN = {"check": 1.0, "labels": 15.0, "train": 6.0, "test": 3.0, "bench": 4.0,
@@ -48,6 +55,8 @@ class TeachSettings:
     """What ``teach`` was asked for (the run's identity, with the mesh's content)."""
 
     mesh: str
+    """A mesh file, or a built-in part's name (which teaches it by the shipped models' recipe:
+    the same labels, the same training, so the same weights)."""
     mesh_scale: float = 1.0
     mass_kg: float | None = None
     samples: int = 5100
@@ -83,14 +92,29 @@ class Teacher:
         self._open()
 
     @property
+    def builtin(self) -> bool:
+        """Whether the part is a built-in one (no mesh, no part file)."""
+        return self.settings.mesh in BUILTIN_PARTS
+
+    @property
     def part_file(self) -> Path:
         return self.out / "part.json"
 
     @property
+    def part(self) -> str:
+        """The part as every later stage names it: the built-in's name, or the part file."""
+        return self.settings.mesh if self.builtin else str(self.part_file)
+
+    @property
     def model(self) -> Path:
-        return trained_model_path(self.part_file)
+        return self.out / "model.pt" if self.builtin else trained_model_path(self.part_file)
 
     def _identity(self) -> dict:
+        if self.builtin:
+            if self.settings.mesh_scale != 1.0 or self.settings.mass_kg is not None:
+                raise TangleDrakeError(f"{self.settings.mesh} is a built-in part, with its own "
+                                       "size and mass: --mesh-scale and --mass are for meshes")
+            return asdict(self.settings)
         mesh = Path(self.settings.mesh)
         if not mesh.is_file():
             raise TangleDrakeError(f"mesh file not found: {mesh}")
@@ -151,10 +175,11 @@ class Teacher:
 
         s = self.settings
         scenario = resolve_scenario("floating_gripper.yaml")
-        self.part_file.write_text(json.dumps({"mesh": str(Path(s.mesh).resolve()),
-                                              "mesh_scale": s.mesh_scale,
-                                              "mass_kg": s.mass_kg}, indent=1) + "\n")
-        check = check_part(self.part_file, 1.0, scenario)
+        if not self.builtin:
+            self.part_file.write_text(json.dumps({"mesh": str(Path(s.mesh).resolve()),
+                                                  "mesh_scale": s.mesh_scale,
+                                                  "mass_kg": s.mass_kg}, indent=1) + "\n")
+        check = check_part(self.part, 1.0, scenario)
         if check.accepted:
             check = self._pile(check, scenario)
         check.write(self.out / "check.json")
@@ -169,11 +194,9 @@ class Teacher:
         from tangle_drake.teach.pictures import write_pictures
 
         s = self.settings
-        part = load_part(self.part_file)
-        entry = part.sdf_path.parent
-        pieces = [trimesh.load_mesh(p, process=False)
-                  for p in sorted(entry.glob("collision_*.obj"))]
-        pile = scenario_of(scenario, self.part_file)
+        part = load_part(self.part)
+        pieces = collision_pieces(self.part)
+        pile = scenario_of(scenario, self.part)
         pile.view_cameras = []
         scene = make_scene(pile, seed=s.seed)
         for path in write_pictures(self.out, trimesh.load_mesh(part.visual_mesh_path,
@@ -188,10 +211,10 @@ class Teacher:
         from tangle_drake.tangle_data.settings import CollectSettings
         from tangle_drake.tangle_data.simulator import data_scenario
 
-        settings = CollectSettings(part=str(self.part_file), seed=seed)
+        settings = CollectSettings(part=self.part, seed=seed)
         count = self.settings.parts_per_pile
         if count is None:
-            part = load_part(self.part_file)
+            part = load_part(self.part)
             count = default_parts_per_pile(part.name, part, data_scenario(
                 default_scenario_text(), settings).bin)
         result = collect(replace(settings, parts_per_pile=count), out, samples,
@@ -205,13 +228,20 @@ class Teacher:
         self._collect(self.out / "data", self.settings.samples, self.settings.seed)
 
     def _train(self) -> None:
+        import torch
+
         from tangle_drake.tangle_cnn.train import TrainSettings, train
 
         s = self.settings
-        train(self.out / "data", self.model,
-              TrainSettings(epochs=s.epochs, seed=s.seed,
-                            validation_fraction=s.validation_fraction),
-              device="cpu", log=lambda line: self.say(f"  {line}"))
+        threads = torch.get_num_threads()
+        torch.set_num_threads(TRAIN_THREADS)
+        try:
+            train(self.out / "data", self.model,
+                  TrainSettings(epochs=s.epochs, seed=s.seed,
+                                validation_fraction=s.validation_fraction),
+                  device="cpu", log=lambda line: self.say(f"  {line}"))
+        finally:
+            torch.set_num_threads(threads)
         from tangle_drake.tangle_cnn.model import load_tangle_model
         from tangle_drake.tangle_cnn.onnx_export import export_onnx
 
@@ -234,7 +264,7 @@ class Teacher:
         from tangle_drake.bench.runner import BenchOptions, run_bench
 
         options = BenchOptions(methods=["graspability", f"model:{self.model}"],
-                               parts=[str(self.part_file)], trials=self.settings.bench_trials,
+                               parts=[self.part], trials=self.settings.bench_trials,
                                workers=self.workers, ray=self.ray, out=self.out / "bench",
                                seed=self.settings.seed,
                                command=f"tangle-drake teach {self.settings.mesh}")
@@ -243,5 +273,5 @@ class Teacher:
     def _card(self) -> None:
         from tangle_drake.teach.card import write_card
 
-        path = write_card(self.out)
+        path = write_card(self.out, self.settings.mesh if self.builtin else "part.json")
         self.say(f"  wrote {path}")
