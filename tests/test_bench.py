@@ -428,21 +428,24 @@ def test_the_escape_watch_names_the_mode_a_lost_part_left_the_bin_in():
     poses[1, :3, 3] = [0.34, 0.45, 0.40]  # flung past the wall during the shake, falling
     poses[2, :3, 3] = [0.34, 0.20, 1.20]  # held high above the bin: not lost
     watch(Mode.TRANSFER)  # seen at the look after the shake's interval
-    assert watch.escapes == [{"grasp": 1, "mode": "shake", "part": 1}]
+    assert watch.escapes == [{"grasp": 1, "mode": "shake", "part": 1, "source": "bin"}]
     poses[1, :3, 3] = [0.34, 0.45, 0.01]  # on the ground: the same escape, counted once
     poses[2, :3, 3] = [*tray_xy, 0.89]  # released into the tray (below the bin's floor)
     watch(Mode.HOME)
     assert len(watch.escapes) == 1
+    poses[2, :3, 3] = [0.34, 0.75, 0.30]  # bounced out of the tray while the next grasp began
+    watch(Mode.APPROACH)
+    assert watch.escapes[1] == {"grasp": 1, "mode": "home", "part": 2, "source": "tray"}
 
 
 def test_lost_parts_are_reported_by_the_mode_they_left_the_bin_in():
     runs = [{"method": "m", "grasps": [], "delivered": 3, "left_in_bin": 0, "lost": 3,
              "sim_s": 10.0, "compute_s": 1.0,
-             "escapes": [{"grasp": 0, "mode": "shake", "part": 1},
-                         {"grasp": 2, "mode": "shake", "part": 4}]},
+             "escapes": [{"grasp": 0, "mode": "shake", "part": 1, "source": "bin"},
+                         {"grasp": 2, "mode": "shake", "part": 4, "source": "bin"}]},
             {"method": "m", "grasps": [], "delivered": 5, "left_in_bin": 0, "lost": 1,
              "sim_s": 10.0, "compute_s": 1.0}]  # a run made before escapes were recorded
-    assert figures(runs)["lost_by_mode"] == {"shake": 2, "unseen": 2}
+    assert figures(runs)["lost_by_mode"] == {"bin in shake": 2, "unseen": 2}
 
 
 def test_open_loop_goes_with_clear():

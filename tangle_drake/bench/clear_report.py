@@ -5,8 +5,8 @@ Per method and part, and per method over all parts: parts delivered to the tray;
 part and with several; several read as one (delivered on the estimator's "one part" while
 several came up, were held up through contacts at the weighing, or landed); weighings made
 while a held part still rested on the pile (the wrist then reads light); grasps per delivered
-part; shakes and put-backs; parts left in the bin and lost (in neither bin nor tray, by the
-planner's mode when they left the bin); the share of the bin cleared; delivered parts per hour
+part; shakes and put-backs; parts left in the bin and lost (in neither bin nor tray, by where
+they fell from and the planner's mode then); the share of the bin cleared; delivered parts per hour
 of simulated time plus computation. Rates come with 95 % bootstrap intervals over bins.
 """
 
@@ -54,9 +54,11 @@ def _counts(runs: Sequence[dict]) -> dict:
 
 
 def _lost_by_mode(runs: Sequence[dict]) -> dict[str, int]:
-    """Lost parts by the planner's mode when they left the bin; ``unseen``: lost, but never
-    seen falling (or from a run made before escapes were recorded)."""
-    modes = Counter(e["mode"] for run in runs for e in run.get("escapes", []))
+    """Lost parts by where they came from and the planner's mode when they left (``bin in
+    put back``); ``unseen``: lost, but never seen falling (or from a run made before escapes
+    were recorded)."""
+    modes = Counter(f"{e.get('source', 'bin')} in {e['mode']}"
+                    for run in runs for e in run.get("escapes", []))
     unseen = sum(run["lost"] - len(run.get("escapes", [])) for run in runs)
     if unseen:
         modes["unseen"] = unseen
@@ -137,7 +139,8 @@ def _lost_lines(by_method: dict, methods: Sequence[str]) -> list[str]:
     lines = [f"- {m}: " + ", ".join(f"{mode} {n}" for mode, n in
                                     by_method[m]["lost_by_mode"].items())
              for m in methods if by_method[m]["lost_by_mode"]]
-    return ["", "Lost parts, by the planner's mode when they left the bin:", "", *lines] \
+    return ["", "Lost parts, by where they were (bin, tray, gripper) and the planner's mode "
+            "when they fell:", "", *lines] \
         if lines else []
 
 

@@ -125,29 +125,34 @@ class EscapeWatch:
 
     A part counts once it is outside the bin's footprint, not in the tray, and below the bin's
     floor (falling past it to the ground: a part in the gripper is above the bin, one being
-    released over the tray is the tray's).
+    released over the tray is the tray's). Where it was at the look before says where it came
+    from: the bin, the tray (delivered, then out again), or neither (in the gripper, or in
+    flight).
     """
 
     def __init__(self, pick: PickDiagram, bin_config: BinConfig, context: Context,
                  grasps: list[dict]) -> None:
         self._pick, self._bin, self._context, self._grasps = pick, bin_config, context, grasps
         self._seen: set[int] = set()
-        self._mode: Mode | None = None
+        self._before: tuple[Mode, np.ndarray, np.ndarray] | None = None
         self.escapes: list[dict] = []
         """One per escaped part: ``grasp`` (the index of the grasp in progress, that is the
-        number recorded before it), ``mode`` (the planner's mode when it left), ``part``."""
+        number recorded before it), ``mode`` (the planner's mode when it left), ``part``,
+        ``source`` (``bin``, ``tray`` or ``gripper``, where it was at the look before)."""
 
     def __call__(self, mode: Mode) -> float:
         positions = self._pick.station.part_poses(self._context)[:, :3, 3]
-        out = ~inside_bin(self._bin, positions) & ~self._pick.tray.in_tray(positions) \
-            & (positions[:, 2] < self._bin.floor_height)
+        in_bin, in_tray = inside_bin(self._bin, positions), self._pick.tray.in_tray(positions)
+        out = ~in_bin & ~in_tray & (positions[:, 2] < self._bin.floor_height)
+        left_in, was_in_bin, was_in_tray = self._before or (mode, in_bin, in_tray)
         for part in np.flatnonzero(out):
             if int(part) not in self._seen:
                 self._seen.add(int(part))
-                left_in = self._mode if self._mode is not None else mode
+                source = "bin" if was_in_bin[part] else "tray" if was_in_tray[part] \
+                    else "gripper"
                 self.escapes.append({"grasp": len(self._grasps), "mode": left_in.value,
-                                     "part": int(part)})
-        self._mode = mode
+                                     "part": int(part), "source": source})
+        self._before = (mode, in_bin, in_tray)
         return POLL
 
 
