@@ -1,0 +1,132 @@
+"""How many auto-lift labels does a tangle CNN need? Train on growing prefixes of one dataset
+and score every model on the same fresh test piles.
+
+    python tools/learning_curve.py --data data/u_hook --test data/u_hook_test \
+        --sizes 1000 2000 3000 --out results/curve_u_hook
+
+For each size N the first piles of ``--data`` (in task order, as a shorter collection with
+the same seed would have made them) up to N samples become a dataset of their own under
+``--out``, trained with the shipped recipe (``train --seed 0`` on ``TRAIN_THREADS``); the
+whole dataset is the last point. Each model is scored on every sample of ``--test``: ROC-AUC
+and accuracy, and the paired difference of its ROC-AUC from the whole dataset's model with a
+95 % bootstrap interval over the test piles (the same samples score both models, so the
+interval is much narrower than either AUC's own). Training resumes where it stopped; a
+finished model is not trained again. ``curve.json`` in ``--out`` keeps the figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from tangle_drake.dataset import MANIFEST, finished_tasks, read_shard, shard_name
+from tangle_drake.tangle_cnn.metrics import roc_auc
+from tangle_drake.tangle_cnn.model import load_tangle_model
+from tangle_drake.tangle_cnn.train import TrainSettings, train
+from tangle_drake.tangle_cnn.train_settings import TRAIN_THREADS
+from tangle_drake.tangle_cnn.training_data import load_checked_samples
+
+BOOTSTRAP_SAMPLES = 2000
+BOOTSTRAP_SEED = 0
+
+
+def prefix_dataset(data: Path, samples: int, out: Path) -> int:
+    """``out`` holds the first tasks of ``data`` up to ``samples`` samples (hard links, or
+    copies across file systems); the samples it holds."""
+    out.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(data / MANIFEST, out / MANIFEST)
+    held = 0
+    for task in sorted(finished_tasks(data)):
+        if held >= samples:
+            break
+        for name in (shard_name(task), Path(shard_name(task)).with_suffix(".json").name):
+            source, target = data / name, out / name
+            if source.exists() and not target.exists():
+                try:
+                    target.hardlink_to(source)
+                except OSError:
+                    shutil.copyfile(source, target)
+        held += len(read_shard(data / shard_name(task), ("label",))["label"])
+    return held
+
+
+def scores(model_path: Path, test: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """P(tangled) of every test sample, the truth (1: tangled) and each sample's pile."""
+    model = load_tangle_model(model_path)
+    samples, _, _ = load_checked_samples(test, objective=model.objective)
+    p_good = np.concatenate([model.probabilities(samples["crop"][i:i + 256],
+                                                 samples["depth_m"][i:i + 256])[:, 0]
+                             for i in range(0, len(samples["label"]), 256)])
+    return 1.0 - p_good, (samples["label"] != 0).astype(int), samples["pile_seed"]
+
+
+def paired_auc_interval(truth: np.ndarray, piles: np.ndarray, a: np.ndarray,
+                        b: np.ndarray) -> list[float]:
+    """95 % bootstrap interval of AUC(a) - AUC(b), resampling whole test piles."""
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    groups = [np.flatnonzero(piles == pile) for pile in np.unique(piles)]
+    differences = []
+    for _ in range(BOOTSTRAP_SAMPLES):
+        rows = np.concatenate([groups[i] for i in rng.integers(len(groups), size=len(groups))])
+        first, second = roc_auc(truth[rows], a[rows]), roc_auc(truth[rows], b[rows])
+        if first is not None and second is not None:
+            differences.append(first - second)
+    return [float(np.percentile(differences, 2.5)), float(np.percentile(differences, 97.5))]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--data", type=Path, required=True, help="the training dataset")
+    parser.add_argument("--test", type=Path, required=True, help="test piles of another seed")
+    parser.add_argument("--sizes", type=int, nargs="+", required=True,
+                        help="samples of each smaller training set")
+    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--seed", type=int, default=0, help="training seed (default 0)")
+    args = parser.parse_args()
+    torch.set_num_threads(TRAIN_THREADS)
+    points = []
+    for size in [*sorted(args.sizes), None]:
+        data = args.data if size is None else args.out / f"data_{size}"
+        held = (len(load_checked_samples(data)[0]["label"]) if size is None
+                else prefix_dataset(args.data, size, data))
+        model = args.out / f"model_{'all' if size is None else size}.pt"
+        seconds = None  # trained before
+        if not model.is_file():
+            start = time.perf_counter()
+            train(data, model, TrainSettings(seed=args.seed), device="cpu",
+                  log=lambda line: print(f"  {line}", flush=True))
+            seconds = round(time.perf_counter() - start, 1)
+        points.append({"samples": held, "model": str(model), "train_s": seconds})
+        print(f"trained on {held} samples: {model}", flush=True)
+    truth = piles = None
+    for point in points:
+        p_tangled, truth, piles = scores(Path(point["model"]), args.test)
+        point["p_tangled"] = p_tangled
+        point["auc"] = roc_auc(truth, p_tangled)
+        point["accuracy"] = float(((p_tangled > 0.5) == truth.astype(bool)).mean())
+    full = points[-1]
+    print(f"test: {len(truth)} samples from {len(np.unique(piles))} piles of {args.test}")
+    print("| training samples | ROC-AUC | accuracy | ROC-AUC - whole set's [95 % CI] | "
+          "training s |\n|---|---|---|---|---|")
+    for point in points:
+        interval = paired_auc_interval(truth, piles, point["p_tangled"], full["p_tangled"])
+        point["auc_difference"] = point["auc"] - full["auc"]
+        point["auc_difference_ci"] = interval
+        print(f"| {point['samples']} | {point['auc']:.3f} | {100 * point['accuracy']:.1f} % | "
+              f"{point['auc_difference']:+.3f} [{interval[0]:+.3f}, {interval[1]:+.3f}] | "
+              f"{'–' if point['train_s'] is None else round(point['train_s'])} |")
+    for point in points:
+        del point["p_tangled"]
+    (args.out / "curve.json").write_text(json.dumps(
+        {"data": str(args.data), "test": str(args.test), "test_samples": len(truth),
+         "points": points}, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
