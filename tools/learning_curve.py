@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from tangle_drake.dataset import MANIFEST, finished_tasks, read_shard, shard_name
+from tangle_drake.dataset import MANIFEST, finished_tasks, load_samples, read_shard, shard_name
 from tangle_drake.tangle_cnn.metrics import roc_auc
 from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.train import TrainSettings, train
@@ -56,14 +56,13 @@ def prefix_dataset(data: Path, samples: int, out: Path) -> int:
     return held
 
 
-def scores(model_path: Path, test: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """P(tangled) of every test sample, the truth (1: tangled) and each sample's pile."""
+def p_tangled(model_path: Path, samples: dict[str, np.ndarray]) -> np.ndarray:
+    """The model's P(tangled) of every test sample."""
     model = load_tangle_model(model_path)
-    samples, _, _ = load_checked_samples(test, objective=model.objective)
     p_good = np.concatenate([model.probabilities(samples["crop"][i:i + 256],
                                                  samples["depth_m"][i:i + 256])[:, 0]
                              for i in range(0, len(samples["label"]), 256)])
-    return 1.0 - p_good, (samples["label"] != 0).astype(int), samples["pile_seed"]
+    return 1.0 - p_good
 
 
 def paired_auc_interval(truth: np.ndarray, piles: np.ndarray, a: np.ndarray,
@@ -93,7 +92,7 @@ def main() -> None:
     points = []
     for size in [*sorted(args.sizes), None]:
         data = args.data if size is None else args.out / f"data_{size}"
-        held = (len(load_checked_samples(data)[0]["label"]) if size is None
+        held = (len(load_samples(data, ("label",))["label"]) if size is None
                 else prefix_dataset(args.data, size, data))
         model = args.out / f"model_{'all' if size is None else size}.pt"
         seconds = None  # trained before
@@ -104,12 +103,12 @@ def main() -> None:
             seconds = round(time.perf_counter() - start, 1)
         points.append({"samples": held, "model": str(model), "train_s": seconds})
         print(f"trained on {held} samples: {model}", flush=True)
-    truth = piles = None
+    test, _, _ = load_checked_samples(args.test)
+    truth, piles = (test["label"] != 0).astype(int), test["pile_seed"]
     for point in points:
-        p_tangled, truth, piles = scores(Path(point["model"]), args.test)
-        point["p_tangled"] = p_tangled
-        point["auc"] = roc_auc(truth, p_tangled)
-        point["accuracy"] = float(((p_tangled > 0.5) == truth.astype(bool)).mean())
+        point["p_tangled"] = p = p_tangled(Path(point["model"]), test)
+        point["auc"] = roc_auc(truth, p)
+        point["accuracy"] = float(((p > 0.5) == truth.astype(bool)).mean())
     full = points[-1]
     print(f"test: {len(truth)} samples from {len(np.unique(piles))} piles of {args.test}")
     print("| training samples | ROC-AUC | accuracy | ROC-AUC - whole set's [95 % CI] | "

@@ -102,15 +102,12 @@ class ClearWorker:
         result = episode.run(SIM_TIME_PER_PART * max(in_bin, 1), on_pick=grasp, step=watch)
         # Parts still falling into the tray after the last grasp was recorded come to rest.
         episode.simulator.AdvanceTo(episode.simulator.get_context().get_time() + 1.0)
-        watch(Mode.DONE)
-        context = episode.simulator.get_context()
-        final = tray_count(pick, context)
+        watch(Mode.DONE)  # the last look: where every part came to rest
+        final = tray_count(pick, episode.simulator.get_context())
         if rows:  # what landed after the last record belongs to it
             rows[-1]["landed"] += final - tray[0]
-        positions = pick.station.part_poses(context)[:, :3, 3]
-        inside = inside_bin(rig.scenario.bin, positions)
-        left = int(inside.sum())
-        lost = set(np.flatnonzero(~inside & ~pick.tray.in_tray(positions)).tolist())
+        left = int(watch.in_bin.sum())
+        lost = set(np.flatnonzero(~watch.in_bin & ~watch.in_tray).tolist())
         return {"method": run.name, "end": result.end.value, "sim_s": round(result.time, 3),
                 "compute_s": sum(r["compute_s"] for r in rows), "grasps": rows,
                 "delivered": final, "left_in_bin": left, "lost": in_bin - left - final,
@@ -134,7 +131,10 @@ class EscapeWatch:
                  grasps: list[dict]) -> None:
         self._pick, self._bin, self._context, self._grasps = pick, bin_config, context, grasps
         self._seen: set[int] = set()
-        self._before: tuple[Mode, np.ndarray, np.ndarray] | None = None
+        self._mode: Mode | None = None
+        self.in_bin: np.ndarray | None = None
+        """Per part, whether it was in the bin at the last look (``in_tray``: in the tray)."""
+        self.in_tray: np.ndarray | None = None
         self.escapes: list[dict] = []
         """One per escaped part: ``grasp`` (the index of the grasp in progress, that is the
         number recorded before it), ``mode`` (the planner's mode when it left), ``part``,
@@ -144,15 +144,16 @@ class EscapeWatch:
         positions = self._pick.station.part_poses(self._context)[:, :3, 3]
         in_bin, in_tray = inside_bin(self._bin, positions), self._pick.tray.in_tray(positions)
         out = ~in_bin & ~in_tray & (positions[:, 2] < self._bin.floor_height)
-        left_in, was_in_bin, was_in_tray = self._before or (mode, in_bin, in_tray)
+        if self._mode is None:  # the first look: nothing has moved yet
+            self._mode, self.in_bin, self.in_tray = mode, in_bin, in_tray
         for part in np.flatnonzero(out):
             if int(part) not in self._seen:
                 self._seen.add(int(part))
-                source = "bin" if was_in_bin[part] else "tray" if was_in_tray[part] \
+                source = "bin" if self.in_bin[part] else "tray" if self.in_tray[part] \
                     else "gripper"
-                self.escapes.append({"grasp": len(self._grasps), "mode": left_in.value,
+                self.escapes.append({"grasp": len(self._grasps), "mode": self._mode.value,
                                      "part": int(part), "source": source})
-        self._before = (mode, in_bin, in_tray)
+        self._mode, self.in_bin, self.in_tray = mode, in_bin, in_tray
         return POLL
 
 
