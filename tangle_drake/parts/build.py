@@ -55,6 +55,18 @@ def _meta(
     }
 
 
+def wire_body(spec: wire.WireSpec, density: float
+              ) -> tuple[trimesh.Trimesh, MassProperties, list[wire.CapsuleSpec]]:
+    """A wire part in its body frame (origin at the tube's centre of mass): the tube, its
+    mass properties (about the tube's centre of mass) and the capsules along the skeleton."""
+    tube = wire.tube_mesh(spec)
+    props = mass_properties(tube, density)
+    tube.apply_translation(-props.com)
+    capsules = [wire.CapsuleSpec(c.start - props.com, c.end - props.com, c.radius)
+                for c in wire.capsules(spec)]
+    return tube, props, capsules
+
+
 def build_wire_part(
     directory: Path,
     name: str,
@@ -63,13 +75,7 @@ def build_wire_part(
     density: float,
 ) -> dict[str, Any]:
     """Capsule collisions along the skeleton, one tube visual, mass from the tube."""
-    tube = wire.tube_mesh(spec)
-    props = mass_properties(tube, density)
-    tube.apply_translation(-props.com)
-    capsules = [
-        wire.CapsuleSpec(c.start - props.com, c.end - props.com, c.radius)
-        for c in wire.capsules(spec)
-    ]
+    tube, props, capsules = wire_body(spec, density)
     body_props = MassProperties(props.mass, np.zeros(3), props.inertia)
     write_obj(directory / VISUAL_FILE, tube)
     write_part_sdf(directory / SDF_FILE, name, body_props, VISUAL_FILE, color, capsules=capsules)

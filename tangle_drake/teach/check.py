@@ -20,10 +20,10 @@ import trimesh
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
-from tangle_drake.parts import BUILTIN_PARTS, cache, load_part, wire
+from tangle_drake.parts import BUILTIN_PARTS, cache, load_part
+from tangle_drake.parts.build import wire_body
 from tangle_drake.parts.catalog import builtin_spec
 from tangle_drake.parts.library import PART_FILE_SUFFIX, STEEL_DENSITY, read_part_file
-from tangle_drake.parts.mass import mass_properties
 from tangle_drake.parts.mesh_import import MESH_SUFFIXES
 from tangle_drake.pile import PileReport, check_pile
 from tangle_drake.scenario import PartCount, Scenario
@@ -139,15 +139,14 @@ def collision_pieces(part: str | Path, mesh_scale: float = 1.0) -> list[trimesh.
         entry = load_part(part, mesh_scale=mesh_scale).sdf_path.parent
         return [trimesh.load_mesh(p, process=False)
                 for p in sorted(entry.glob("collision_*.obj"))]
-    spec = builtin_spec(str(part)).scaled(mesh_scale)
-    com = mass_properties(wire.tube_mesh(spec), STEEL_DENSITY).com  # the body frame's origin
+    _, _, capsules = wire_body(builtin_spec(str(part)).scaled(mesh_scale), STEEL_DENSITY)
     pieces = []
-    for capsule in wire.capsules(spec):
+    for capsule in capsules:
         axis = capsule.end - capsule.start
         piece = trimesh.creation.capsule(height=float(np.linalg.norm(axis)),
                                          radius=capsule.radius)
         piece.apply_transform(trimesh.geometry.align_vectors([0.0, 0.0, 1.0], axis))
-        piece.apply_translation((capsule.start + capsule.end) / 2 - com)
+        piece.apply_translation((capsule.start + capsule.end) / 2)
         pieces.append(piece)
     return pieces
 
