@@ -49,6 +49,8 @@ PLANNING_VELOCITY_LIMIT = 1.0
 """Joint speed limit for motion planning, rad/s (the ROS stack's conservative setting)."""
 PLANNING_ACCELERATION_LIMIT = 1.5
 """Joint acceleration limit for motion planning, rad/s²."""
+PLANNING_SLOW_SPEED = 0.03
+"""Tool-centre speed over the slow stretch next to the pile, m/s (the gantry's too)."""
 
 DIRECTIVES_URL = "package://nextage/nextage_with_gripper.dmd.yaml"
 """Model directives adding ``nextage`` and ``gripper`` (for scenario files)."""

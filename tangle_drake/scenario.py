@@ -202,7 +202,8 @@ class Scenario:
                 _require(config.force_limit > 0, f"model_drivers.{name}.force_limit",
                          "must be positive")
             if isinstance(config, NextageDriver):
-                for limit in ("planning_velocity_limit", "planning_acceleration_limit"):
+                for limit in ("planning_velocity_limit", "planning_acceleration_limit",
+                              "planning_slow_speed"):
                     _require(0 < getattr(config, limit) < float("inf"),
                              f"model_drivers.{name}.{limit}", "must be positive and finite")
 

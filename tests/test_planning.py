@@ -225,12 +225,13 @@ def test_a_grasp_whose_palm_hits_the_wall_is_reported(motion):
     assert error.value.kind is FailureKind.COLLISION
 
 
-def _with_arm_limits(velocity: float, acceleration: float = 1.5):
+def _with_arm_limits(velocity: float, acceleration: float = 1.5, slow_speed: float = 0.03):
     scenario = resolve_scenario(None)
     drivers = dict(scenario.model_drivers)
     drivers["nextage"] = dataclasses.replace(drivers["nextage"],
                                              planning_velocity_limit=velocity,
-                                             planning_acceleration_limit=acceleration)
+                                             planning_acceleration_limit=acceleration,
+                                             planning_slow_speed=slow_speed)
     return dataclasses.replace(scenario, model_drivers=drivers)
 
 
@@ -245,6 +246,24 @@ def test_the_scenario_sets_the_arms_planning_limits():
     for t in samples(fast):
         assert np.abs(fast.EvalDerivative(t, 1)).max() <= 1.9 + 1e-6
         assert np.abs(fast.EvalDerivative(t, 2)).max() <= 3.0 + 1e-6
+
+
+def test_the_scenario_sets_the_speed_next_to_the_pile():
+    slow, brisk = (motion_for(_with_arm_limits(1.9, 3.0, speed)) for speed in (0.03, 0.06))
+    picks = [m.plan_pick(IN_BIN.GetAsMatrix4(), MEASURED_HOME) for m in (slow, brisk)]
+    for m, pick in zip((slow, brisk), picks, strict=True):
+        # The last centimetre of the descent lies within the slow stretch: its tool speed.
+        end = pick.descend.end_time()
+        times = np.linspace(0.0, end, 400)
+        z = np.array([m.model.tcp_pose(m.model.full_q(pick.descend.value(t).ravel()))
+                      .translation()[2] for t in times])
+        last = z < z[-1] + 0.01
+        speed = np.abs(np.gradient(z, times))[last].max()
+        assert speed <= m.settings.slow_speed * 1.05
+    assert brisk.settings.slow_speed == 0.06
+    # the slow stretch (3 cm each way) takes about half as long
+    assert picks[1].descend.end_time() < picks[0].descend.end_time() - 0.3
+    assert picks[1].lift.end_time() < picks[0].lift.end_time() - 0.3
 
 
 def test_an_arm_planned_faster_than_its_joints_are_rated_is_refused():

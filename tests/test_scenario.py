@@ -65,6 +65,8 @@ camera: {focal: !FovDegrees {y: 40}}
      "model_drivers.nextage.planning_velocity_limit"),
     ("model_drivers: {nextage: !NextageDriver {planning_acceleration_limit: .inf}}",
      "model_drivers.nextage.planning_acceleration_limit"),
+    ("model_drivers: {nextage: !NextageDriver {planning_slow_speed: -0.03}}",
+     "model_drivers.nextage.planning_slow_speed"),
 ])
 def test_malformed_field_is_named(text, field):
     with pytest.raises(TangleDrakeError, match=re.escape(f"'{field}'")):

@@ -22,7 +22,11 @@ from dataclasses import dataclass
 from pydrake.systems.sensors import CameraConfig
 
 from tangle_drake.gripper import DEFAULT_GRIPPER
-from tangle_drake.robot import PLANNING_ACCELERATION_LIMIT, PLANNING_VELOCITY_LIMIT
+from tangle_drake.robot import (
+    PLANNING_ACCELERATION_LIMIT,
+    PLANNING_SLOW_SPEED,
+    PLANNING_VELOCITY_LIMIT,
+)
 
 
 @dataclass
@@ -50,6 +54,9 @@ class NextageDriver(JointPositionDriver):
     joint's rated speed (the chest's 1.92). The default is the ROS stack's conservative one."""
     planning_acceleration_limit: float = PLANNING_ACCELERATION_LIMIT
     """Joint acceleration the pick's moves are planned with, rad/s²."""
+    planning_slow_speed: float = PLANNING_SLOW_SPEED
+    """Tool-centre speed over the slow stretch next to the pile (the last of the descent, the
+    first of the lift), m/s."""
 
 
 @dataclass

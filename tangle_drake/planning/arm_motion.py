@@ -40,6 +40,7 @@ from tangle_drake.robot import (
     HOME,
     NEXTAGE_JOINTS,
     PLANNING_ACCELERATION_LIMIT,
+    PLANNING_SLOW_SPEED,
     PLANNING_VELOCITY_LIMIT,
 )
 from tangle_drake.scenario import BinConfig
@@ -57,7 +58,7 @@ class ArmMotionSettings:
     """Per joint, rad/s."""
     acceleration_limit: float = PLANNING_ACCELERATION_LIMIT
     """Per joint, rad/s²."""
-    slow_speed: float = 0.03
+    slow_speed: float = PLANNING_SLOW_SPEED
     """Tool-centre speed over the slow stretch next to the pile, m/s."""
     cartesian_speed: float = 0.2
     """Tool-centre speed over the rest of the descent and lift, m/s."""

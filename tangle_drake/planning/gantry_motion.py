@@ -22,6 +22,7 @@ from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses
 from tangle_drake.planning.motion import PickMotion, PlanningError, ShakeSettings
 from tangle_drake.planning.trajectory import MIN_DURATION, chain, hold, rest_to_rest
+from tangle_drake.robot import PLANNING_SLOW_SPEED
 from tangle_drake.scenario import BinConfig
 
 VELOCITY = np.array([0.5, 0.5, 0.5, 2.0])
@@ -32,8 +33,6 @@ FREE_VELOCITY = np.array([1.0, 1.0, 1.0, 4.0])
 """Limits of the empty gripper's moves that touch nothing (from home to above the grasp,
 and down to where the slow stretch begins), so they may go faster."""
 FREE_ACCELERATION = np.array([5.0, 5.0, 5.0, 15.0])
-SLOW_SPEED = 0.03
-"""Tool speed over the last and first centimetres at the pile, m/s (the arm's too)."""
 PLACE_DROP = 0.1
 """Without a tray, the part is released this far below the parked gantry and falls to the
 floor, m."""
@@ -102,8 +101,8 @@ class GantryMotion:
             transfer = home = retreat = hold(lift, MIN_DURATION)
         return PickMotion(
             approach=leg(q_now, pre, free=True),
-            descend=chain([leg(pre, slow, free=True), leg(slow, grasp, SLOW_SPEED)]),
-            lift=chain([leg(grasp, slow, SLOW_SPEED), leg(slow, lift)]),
+            descend=chain([leg(pre, slow, free=True), leg(slow, grasp, PLANNING_SLOW_SPEED)]),
+            lift=chain([leg(grasp, slow, PLANNING_SLOW_SPEED), leg(slow, lift)]),
             transfer=transfer, home=home, retreat=retreat, X_WT=poses.grasp.GetAsMatrix4())
 
     def plan_shake(self, hold_command: np.ndarray) -> PiecewisePolynomial:
@@ -124,7 +123,7 @@ class GantryMotion:
         grasp_z = float(np.asarray(X_WT)[2, 3]) + DEFAULT_GRIPPER.tcp_offset
         end = start.copy()
         end[2] = min(start[2], grasp_z + clearance)
-        return _leg(start, end, SLOW_SPEED)
+        return _leg(start, end, PLANNING_SLOW_SPEED)
 
     def plan_line(self, start: np.ndarray, end: np.ndarray) -> PiecewisePolynomial:
         return _leg(np.asarray(start, float), np.asarray(end, float))

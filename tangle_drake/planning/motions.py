@@ -30,6 +30,7 @@ def motion_for(scenario: Scenario, *, return_home: bool = True) -> Motion:
         settings = ArmMotionSettings(
             velocity_limit=_rated(scenario, name, config.planning_velocity_limit),
             acceleration_limit=config.planning_acceleration_limit,
+            slow_speed=config.planning_slow_speed,
             place_position=None if place is None else tuple(place))
         return ArmMotion(scenario.bin, settings, tray=scenario.tray)
     if isinstance(config, GantryDriver):
