@@ -6,7 +6,7 @@ and score every model on the same fresh test piles.
 
 For each size N the first piles of ``--data`` (in task order, as a shorter collection with
 the same seed would have made them) up to N samples become a dataset of their own under
-``--out``, trained with the shipped recipe (``train --seed 0`` on ``TRAIN_THREADS``); the
+``--out``, trained with the shipped recipe (``train`` at ``--seed``, on ``TRAIN_THREADS``); the
 whole dataset is the last point. Each model is scored on every sample of ``--test``: ROC-AUC
 and accuracy, and the paired difference of its ROC-AUC from the whole dataset's model with a
 95 % bootstrap interval over the test piles (the same samples score both models, so the
