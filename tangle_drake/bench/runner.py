@@ -17,8 +17,6 @@ from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from tqdm import tqdm
-
 from tangle_drake import __version__
 from tangle_drake.bench.clear_report import summarize_clearing, write_clear_report
 from tangle_drake.bench.clearing import ClearWorker
@@ -42,6 +40,7 @@ from tangle_drake.parts.library import part_digest
 from tangle_drake.pick.diagram import closed_loop_settings, default_graspability_params
 from tangle_drake.pick.selection import model_part_notice
 from tangle_drake.pile import check_pile
+from tangle_drake.progress import Progress
 from tangle_drake.scenario import parse_scenario
 from tangle_drake.scenario_files import scenario_path
 from tangle_drake.tangle_cnn.objectives import rule_objective
@@ -286,9 +285,7 @@ def _run_trials(config: BenchConfig, store: ResultStore, todo: list[tuple[int, i
         count = min(count, len(todo))
     backend = start_workers(ClearWorker if config.clear else TrialWorker, (config,), count,
                             options.ray)
-    progress = tqdm(total=total, initial=total - len(todo), unit="trial", desc="bench",
-                    dynamic_ncols=True,
-                    disable=None if options.show_progress is None else not options.show_progress)
+    progress = Progress(total, total - len(todo), "trial", "bench", options.show_progress)
     pending: dict[Future, tuple[int, int]] = {}
     queue = iter(todo)
     successes = picks = new = 0
@@ -322,8 +319,7 @@ def _run_trials(config: BenchConfig, store: ResultStore, todo: list[tuple[int, i
                     successes += sum(p["result"] == "success" for p in result["picks"])
                     postfix = f"success {100 * successes / max(picks, 1):.0f}% of {picks} " \
                         "new picks"
-                progress.update(1)
-                progress.set_postfix_str(postfix)
+                progress.update(1, postfix)
     except KeyboardInterrupt:
         interrupted = True
     finally:

@@ -1,51 +1,42 @@
-"""The collection's progress bar: samples, samples per second, and the class balance so far."""
+"""The collection's progress: samples, samples per minute, and the class balance so far."""
 
 from __future__ import annotations
 
-import time
-
-from tqdm import tqdm
+from tangle_drake.progress import LINE_INTERVAL_S, Progress
 
 
 class CollectProgress:
-    """A tqdm bar over the sample target, updated once per finished task.
-
-    Shown on a terminal only (tqdm's default); the command prints a summary either way.
-    """
+    """:class:`~tangle_drake.progress.Progress` over the sample target, updated once per
+    finished task (a bar on a terminal, a line a minute in a log). The command prints a
+    summary either way."""
 
     def __init__(self, description: str, target: int, counts: dict, workers: int,
-                 enabled: bool | None = None) -> None:
+                 enabled: bool | None = None, line_interval: float = LINE_INTERVAL_S) -> None:
         self.samples = counts["samples"]
         self.tangled = counts["tangled"]
         self.skipped = _skipped(counts)
         self.workers = workers
-        self.new = 0
-        self.start = time.perf_counter()
-        self.bar = tqdm(total=target, initial=min(self.samples, target), unit="sample",
-                        desc=description, dynamic_ncols=True,
-                        disable=None if enabled is None else not enabled)
-        self._postfix()
+        self.progress = Progress(target, self.samples, "sample", description, enabled,
+                                 line_interval)
+        self.progress.update(0, self._figures())
 
     def task_done(self, stats: dict) -> None:
         self.samples += stats["samples"]
         self.tangled += stats["tangled"]
         self.skipped += _skipped(stats)
-        self.new += stats["samples"]
-        self.bar.update(stats["samples"])
-        self._postfix()
+        self.progress.update(stats["samples"], self._figures())
 
     def per_minute_per_worker(self) -> float:
-        """New samples per minute per worker, wall clock, since the bar started."""
-        elapsed = max(time.perf_counter() - self.start, 1e-9)
-        return 60 * self.new / elapsed / self.workers
+        """New samples per minute per worker, wall clock, since the collection started."""
+        return self.progress.per_minute() / self.workers
 
-    def _postfix(self) -> None:
+    def _figures(self) -> str:
         share = f"{100 * self.tangled / self.samples:.0f}%" if self.samples else "-"
-        self.bar.set_postfix_str(f"tangled {share}, skipped {self.skipped}, "
-                                 f"{self.per_minute_per_worker():.1f}/min/worker")
+        return (f"tangled {share}, skipped {self.skipped}, "
+                f"{self.per_minute_per_worker():.1f}/min/worker")
 
     def close(self) -> None:
-        self.bar.close()
+        self.progress.close()
 
 
 def _skipped(counts: dict) -> int:

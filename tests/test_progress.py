@@ -1,0 +1,33 @@
+"""Long jobs say where they stand in a log too (off a terminal tqdm draws nothing)."""
+
+from tangle_drake.progress import Progress
+from tangle_drake.tangle_data.progress import CollectProgress
+
+
+def test_off_a_terminal_a_job_prints_lines_with_its_figures_and_the_time_left(capsys):
+    progress = Progress(10, 2, "trial", "bench", interval=0.0)
+    progress.update(3, "7 parts delivered")
+    progress.close()
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 1
+    assert "bench: 5/10 trials, 7 parts delivered" in lines[0]
+    assert "min left" in lines[0]
+
+
+def test_lines_come_at_most_once_per_interval_and_not_at_all_when_switched_off(capsys):
+    slow = Progress(10, 0, "trial", "bench", interval=3600.0)
+    silent = Progress(10, 0, "trial", "bench", enabled=False, interval=0.0)
+    for _ in range(5):
+        slow.update(1, "")
+        silent.update(1, "")
+    assert capsys.readouterr().out == ""
+
+
+def test_a_collection_reports_its_samples_and_balance(capsys):
+    counts = {"samples": 4, "tangled": 1}
+    progress = CollectProgress("collect u_hook", 20, counts, workers=2, line_interval=0.0)
+    progress.task_done({"samples": 6, "tangled": 3})
+    progress.close()
+    out = capsys.readouterr().out
+    assert "collect u_hook: 10/20 samples, tangled 40%, skipped 0" in out
+    assert progress.per_minute_per_worker() > 0
