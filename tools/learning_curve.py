@@ -26,7 +26,8 @@ import numpy as np
 import torch
 
 from tangle_drake.dataset import MANIFEST, finished_tasks, load_samples, read_shard, shard_name
-from tangle_drake.tangle_cnn.metrics import roc_auc
+from tangle_drake.tangle_cnn.evaluate import class_probabilities
+from tangle_drake.tangle_cnn.metrics import binary_metrics, roc_auc
 from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.train import TrainSettings, train
 from tangle_drake.tangle_cnn.train_settings import TRAIN_THREADS
@@ -57,12 +58,9 @@ def prefix_dataset(data: Path, samples: int, out: Path) -> int:
 
 
 def p_tangled(model_path: Path, samples: dict[str, np.ndarray]) -> np.ndarray:
-    """The model's P(tangled) of every test sample."""
-    model = load_tangle_model(model_path)
-    p_good = np.concatenate([model.probabilities(samples["crop"][i:i + 256],
-                                                 samples["depth_m"][i:i + 256])[:, 0]
-                             for i in range(0, len(samples["label"]), 256)])
-    return 1.0 - p_good
+    """The model's P(tangled) of every test sample (as ``evaluate`` computes it)."""
+    probabilities = class_probabilities(load_tangle_model(model_path), samples)
+    return (1.0 - probabilities[:, 0].astype(np.float32)).astype(np.float64)
 
 
 def paired_auc_interval(truth: np.ndarray, piles: np.ndarray, a: np.ndarray,
@@ -107,8 +105,8 @@ def main() -> None:
     truth, piles = (test["label"] != 0).astype(int), test["pile_seed"]
     for point in points:
         point["p_tangled"] = p = p_tangled(Path(point["model"]), test)
-        point["auc"] = roc_auc(truth, p)
-        point["accuracy"] = float(((p > 0.5) == truth.astype(bool)).mean())
+        metrics = binary_metrics(truth, p)
+        point["auc"], point["accuracy"] = metrics["auc"], metrics["accuracy"]
     full = points[-1]
     print(f"test: {len(truth)} samples from {len(np.unique(piles))} piles of {args.test}")
     print("| training samples | ROC-AUC | accuracy | ROC-AUC - whole set's [95 % CI] | "

@@ -112,6 +112,22 @@ class Evaluation:
         return asdict(self)
 
 
+def class_probabilities(model: TangleModel, samples: dict[str, np.ndarray],
+                        rows: np.ndarray | None = None,
+                        progress: Callable[[int], None] | None = None) -> np.ndarray:
+    """The model's class probabilities of the samples' ``rows`` (default all), (N, classes),
+    scored in batches; ``progress(n)`` is told of each batch of n samples."""
+    rows = np.arange(len(samples["label"])) if rows is None else rows
+    probabilities = np.empty((len(rows), len(model.objective.classes)), dtype=np.float64)
+    for first in range(0, len(rows), BATCH):
+        batch = rows[first:first + BATCH]
+        probabilities[first:first + len(batch)] = model.probabilities(
+            samples["crop"][batch], samples["depth_m"][batch])
+        if progress is not None:
+            progress(len(batch))
+    return probabilities
+
+
 def evaluate_model(model: TangleModel, directory: Path,
                    progress: Callable[[int], None] | None = None) -> Evaluation:
     """Score every sample of ``directory`` (or, for the model's own training data, its
@@ -123,13 +139,7 @@ def evaluate_model(model: TangleModel, directory: Path,
     labels = samples["label"].astype(np.int64)
     _check_crop(model.crop, crop, directory)
     rows, scope = _scored_rows(model, samples, labels, len(objective.classes))
-    probabilities = np.empty((len(rows), len(objective.classes)), dtype=np.float64)
-    for first in range(0, len(rows), BATCH):
-        batch = rows[first:first + BATCH]
-        probabilities[first:first + len(batch)] = model.probabilities(
-            samples["crop"][batch], samples["depth_m"][batch])
-        if progress is not None:
-            progress(len(batch))
+    probabilities = class_probabilities(model, samples, rows, progress)
     # P(not the good class), as float32 arithmetic then float64, as it always was.
     p_tangled = (1.0 - probabilities[:, 0].astype(np.float32)).astype(np.float64)
     classes = labels[rows]
