@@ -82,7 +82,7 @@ def test_linked_rings_come_up_together(sim):
     # Once both rings hang clear of everything else, nothing can change: the lift ends.
     assert label.lift.cleared and label.lift.rise[1] > 0.03
 
-    full = ForceLift(sim.simulator, sim.plant, sim.bodies, sim.part, sim.points,
+    full = ForceLift(sim.simulator, sim.plant, sim.lifter.freeze, sim.part, sim.points,
                      sim.scenario.bin, LiftSettings(early_exit=False))
     sim.restore(settled)
     whole = full.run(0, rise_threshold=0.03, stall_fraction=0.5)

@@ -9,14 +9,18 @@ until its one pick is recorded. Until the robot reaches into the bin the pile's 
 locked: at rest and untouched, they cost the contact solver nothing (the approach is a fifth
 of a floating pick), and unlocking them at the descent leaves them exactly where they lay.
 
-A ``fast`` rig (the physical-pick data's) ends a grasp whose fingers closed on nothing at the
-close, judged empty as the top of the lift would judge it (fingers closed past the empty width
-are empty whatever the lift does: :func:`~tangle_drake.pick.outcome.classify_lift`), instead of
-lifting the empty gripper out: the same outcome, without the lift's simulated seconds. Keeping
-the pile locked through the descent until the fingers touch it was tried and dropped: a pile
-frozen for that second instead of creeping is another pile: it changed 3 of 15 E-shape picks'
-outcomes, where moving the grasp 0.1 mm changed none. ``tools/fast_pick_agreement.py`` checks
-the fast rig against the full one.
+A ``fast`` rig (the physical-pick data's) takes two shortcuts. It ends a grasp whose fingers
+closed on nothing at the close, judged empty as the top of the lift would judge it (fingers
+closed past the empty width are empty whatever the lift does:
+:func:`~tangle_drake.pick.outcome.classify_lift`), instead of lifting the empty gripper out:
+the same outcome, without the lift's simulated seconds. And from the descent on it keeps the
+parts the grasp cannot reach frozen (:mod:`tangle_drake.pile_freeze`, the auto-lift labeller's
+rule measured from the grasp: centres farther than ``freeze_beyond_radii + 1`` bounding radii,
+since the target's centre lies within one radius of its grasp). Keeping the whole pile locked
+through the descent until the fingers touch it was tried and dropped: a pile frozen for that
+second instead of creeping is another pile: it changed 3 of 15 E-shape picks' outcomes, where
+moving the grasp 0.1 mm changed none. ``tools/fast_pick_agreement.py`` checks the fast rig
+against the full one.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ from pydrake.systems.framework import Context
 
 from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
 from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.parts import load_part
 from tangle_drake.pick.demo import SIM_TIME_PER_PICK
 from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
 from tangle_drake.pick.episode import PickEpisode, RunEnd
@@ -36,10 +41,12 @@ from tangle_drake.pick.outcome import Outcome, PickRecord, classify_lift
 from tangle_drake.pick.planner import Mode
 from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler, SettledPile
+from tangle_drake.pile_freeze import PileFreeze, parts_beyond
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import build_station, camera_model
 from tangle_drake.tangle_data.perturb import ContactScaler, PickPhysics
+from tangle_drake.tangle_data.settings import LiftSettings
 
 FLOATING_SIM_LIMIT = 20.0
 """Simulated seconds a floating-gripper pick may take (one takes ~5 s)."""
@@ -90,6 +97,12 @@ class PickRig:
         self.intrinsics: CameraIntrinsics = camera_model(scenario).intrinsics
         station = self.episode.pick.station
         self._contacts = ContactScaler(station.plant, station.scene_graph)
+        self._bin = scenario.bin
+        self._freeze = PileFreeze(station.plant, station.scene_graph, station.pile_bodies)
+        self._reach = (LiftSettings().freeze_beyond_radii + 1) * max(
+            load_part(entry.part, mesh_scale=entry.mesh_scale).bounding_radius
+            for entry in scenario.pile.parts)
+        """Parts whose centre lies farther than this from the grasp stay frozen (``fast``), m."""
 
     def settle(self, seed: int) -> SettledPile:
         """Drop and settle the pile made with ``seed``."""
@@ -122,17 +135,32 @@ class PickRig:
                 for body in locked:
                     body.Unlock(station.mutable_plant_context(episode.context))
                 locked = []
+                if self.fast:
+                    self._freeze_out_of_reach()
             return self.update_period if locked else _POLL
 
         episode.start(state, prepare)
-        result = episode.run(self.sim_limit, step=step,
-                             pause_at=Mode.LIFT if self.fast else None)
-        if result.end is RunEnd.PAUSED:
-            if (empty := self._empty_close()) is not None:
-                return PhysicalPick(empty, result.time, self._image(depth))
-            result = episode.run(self.sim_limit - result.time, step=step)
+        try:
+            result = episode.run(self.sim_limit, step=step,
+                                 pause_at=Mode.LIFT if self.fast else None)
+            if result.end is RunEnd.PAUSED:
+                if (empty := self._empty_close()) is not None:
+                    return PhysicalPick(empty, result.time, self._image(depth))
+                result = episode.run(self.sim_limit - result.time, step=step)
+        finally:
+            self._freeze.thaw(episode.context)
         record = result.records[0] if result.records else None
         return PhysicalPick(record, result.time, self._image(depth))
+
+    def _freeze_out_of_reach(self) -> None:
+        """Freeze the parts too far from the grasp being made to take part in its lift."""
+        context = self.episode.context
+        record = self.episode.pick.diagram.GetOutputPort("current_pick").Eval(context)
+        pose = getattr(record.candidate, "pose", None)
+        if pose is not None:
+            far = parts_beyond(self._freeze.centres(context), self._bin, pose[:2, 3],
+                               self._reach)
+            self._freeze.freeze(context, far)
 
     def _empty_close(self) -> PickRecord | None:
         """At the end of the close, the record of a grasp whose fingers closed on nothing,

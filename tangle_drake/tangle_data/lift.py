@@ -19,11 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.multibody.math import SpatialForce
 from pydrake.multibody.plant import ExternallyAppliedSpatialForce, MultibodyPlant
-from pydrake.multibody.tree import Body
 from pydrake.systems.analysis import Simulator
 
-from tangle_drake.bin_model import inside_bin
 from tangle_drake.parts import PartModel
+from tangle_drake.pile_freeze import PileFreeze, parts_beyond
 from tangle_drake.scenario import BinConfig
 from tangle_drake.tangle_data.settings import LiftSettings
 from tangle_drake.tangle_data.support import Support, classify_support
@@ -67,10 +66,12 @@ class LiftResult:
 class ForceLift:
     """Lifts one part of a settled pile in a station's simulator (reused across lifts)."""
 
-    def __init__(self, simulator: Simulator, plant: MultibodyPlant, bodies: list[Body],
+    def __init__(self, simulator: Simulator, plant: MultibodyPlant, freeze: PileFreeze,
                  part: PartModel, points: np.ndarray, bin_config: BinConfig,
                  settings: LiftSettings) -> None:
         self.simulator = simulator
+        self.freeze = freeze
+        bodies = freeze.bodies
         self.bin = bin_config
         self.plant = plant
         self.bodies = bodies
@@ -109,9 +110,7 @@ class ForceLift:
         end_travel = s.travel_s
         steps = 0
         cleared = False
-        frozen = self._far_from(target, plant_context)
-        for n in frozen:
-            self.bodies[n].Lock(plant_context)
+        self.freeze.freeze(context, self._far_from(target, context))
         try:
             while True:
                 t = context.get_time() - t0
@@ -143,8 +142,7 @@ class ForceLift:
             support = classify_support(self.plant, plant_context, self.bodies, target, still_up)
         finally:
             self.port.FixValue(plant_context, [])
-            for n in frozen:
-                self.bodies[n].Unlock(plant_context)
+            self.freeze.thaw(context)
         return LiftResult(
             target=target, rise=rise, lifted=lifted,
             hanging=tuple(n for n in still_up if support[n] is Support.HANGS),
@@ -154,18 +152,14 @@ class ForceLift:
             cleared=cleared,
             steps=steps)
 
-    def _far_from(self, target: int, plant_context) -> list[int]:
-        """Parts to lock for this lift (see ``LiftSettings.freeze_beyond_radii``): far from
-        the target, and in the bin. A locked body touching geometry of the world body itself
-        (the ground under the station) crashes Drake's SAP (RobotLocomotion/drake#24773),
-        so parts that left the bin stay free."""
+    def _far_from(self, target: int, context) -> list[int]:
+        """Parts to freeze for this lift (see ``LiftSettings.freeze_beyond_radii``): far from
+        the target, and in the bin (:mod:`tangle_drake.pile_freeze`)."""
         factor = self.settings.freeze_beyond_radii
         if factor == 0:
             return []
-        p = np.array([b.EvalPoseInWorld(plant_context).translation() for b in self.bodies])
-        distance = np.linalg.norm(p[:, :2] - p[target, :2], axis=1)
-        far = (distance > factor * self.radius) & inside_bin(self.bin, p)
-        return [int(n) for n in np.flatnonzero(far)]
+        centres = self.freeze.centres(context)
+        return parts_beyond(centres, self.bin, centres[target], factor * self.radius)
 
     def _outcome_is_settled(self, plant_context, target: int, z0: np.ndarray,
                             threshold: float) -> bool:

@@ -21,6 +21,7 @@ from tangle_drake.graspability import GraspabilityParams, GraspCandidate, bin_ro
 from tangle_drake.graspability import compute_candidates as graspability_candidates
 from tangle_drake.parts import load_part
 from tangle_drake.pile import PileSettler
+from tangle_drake.pile_freeze import PileFreeze
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
 from tangle_drake.scene import render_depth
 from tangle_drake.station import build_station, camera_model
@@ -69,8 +70,9 @@ class TangleDataSimulator:
         self.params = GraspabilityParams(top_k=settings.top_k)
         self.points = surface_points(self.part)
         self.region = RegionBox.of_gripper(settings.gripper, settings.labels.region_margin_m)
-        self.lifter = ForceLift(self.simulator, self.plant, self.bodies, self.part, self.points,
-                                self.scenario.bin, settings.lift)
+        self.lifter = ForceLift(self.simulator, self.plant,
+                                PileFreeze(self.plant, self.station.scene_graph, self.bodies),
+                                self.part, self.points, self.scenario.bin, settings.lift)
         self.contacts = ContactScaler(self.plant, self.station.scene_graph)
         self.perturbation = Perturbation()
         self.lifts_run = 0
