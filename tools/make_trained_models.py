@@ -1,10 +1,15 @@
-"""Make the shipped tangle models: collect, train and install one per built-in part, with the
-model card (``tangle_drake/trained/README.md``).
+"""Make the shipped models: collect, train and install one per built-in part, with the model
+card (``tangle_drake/trained/README.md``).
 
     python tools/make_trained_models.py                          # every built-in part
     python tools/make_trained_models.py --parts u_hook --samples 5100
     python tools/make_trained_models.py --test-only              # test the installed models
     python tools/make_trained_models.py --card-only              # rewrite the card only
+    python tools/make_trained_models.py --objective success --parts e_shape --samples 1000
+
+``--objective success`` makes the success/failure CNNs instead (``trained/P.success.pt``, the
+seed's second baseline) from physical-pick data: ``collect --label pick`` into
+``DATA/P_pick`` and ``train --objective success``, tested the same way on ``DATA/P_pick_test``.
 
 For each part it runs the project's own commands, so the card's commands reproduce the models:
 
@@ -31,12 +36,20 @@ import os
 import shutil
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts.catalog import BUILTIN_PARTS
 from tangle_drake.pick.selection import TRAINED_DIR
-from tangle_drake.tangle_cnn.card import TEST_HEADER, VALIDATION_HEADER, test_row, validation_row
+from tangle_drake.tangle_cnn.card import (
+    TEST_HEADER,
+    VALIDATION_HEADER,
+    test_header,
+    test_row,
+    validation_header,
+    validation_row,
+)
 from tangle_drake.tangle_cnn.checkpoint import MODEL_KIND, read_checkpoint
 from tangle_drake.tangle_cnn.train_settings import TRAIN_THREADS
 
@@ -44,6 +57,33 @@ CARD = TRAINED_DIR / "README.md"
 
 TEST_SEED = 1
 """Collection seed of the test piles (the models are trained on seed 0's)."""
+
+
+@dataclass(frozen=True)
+class ModelKind:
+    """What one family of shipped models learns, and where its data and files go."""
+
+    objective: str
+    """``train --objective``."""
+    suffix: str
+    """Of the installed file's stem: ``trained/P{suffix}.pt``."""
+    collect: tuple[str, ...]
+    """``collect``'s extra arguments."""
+    data_suffix: str
+    """Of the dataset directory: ``DATA/P{data_suffix}``."""
+    failure: str
+    """The name of the model's class 1, for the card."""
+
+    def model(self, part: str) -> Path:
+        return TRAINED_DIR / f"{part}{self.suffix}.pt"
+
+    def test_record(self, part: str) -> Path:
+        """Where the card's test figures of ``part``'s shipped model are kept."""
+        return TRAINED_DIR / f"{part}{self.suffix}.test.json"
+
+
+KINDS = {"tangled": ModelKind("tangled", "", (), "", "tangled"),
+         "success": ModelKind("success", ".success", ("--label", "pick"), "_pick", "failure")}
 
 
 
@@ -57,21 +97,18 @@ def run_command(*argv: str, env: dict[str, str] | None = None) -> None:
         raise SystemExit(f"tangle-drake {argv[0]} failed")
 
 
-def make_model(part: str, samples: int, data: Path, work: Path, workers: int) -> None:
+def make_model(kind: ModelKind, part: str, samples: int, data: Path, work: Path,
+               workers: int) -> None:
     """Collect (or extend) the part's data, train on all of it, install the checkpoint."""
-    run_command("collect", "--part", part, "--samples", str(samples), "--out",
-                str(data / part), "--seed", "0", "--workers", str(workers))
-    checkpoint = work / f"{part}.pt"
-    run_command("train", "--data", str(data / part), "--out", str(checkpoint), "--seed", "0",
-                env={"OMP_NUM_THREADS": str(TRAIN_THREADS)})
+    dataset = data / f"{part}{kind.data_suffix}"
+    run_command("collect", *kind.collect, "--part", part, "--samples", str(samples), "--out",
+                str(dataset), "--seed", "0", "--workers", str(workers))
+    checkpoint = work / f"{part}{kind.suffix}.pt"
+    run_command("train", "--data", str(dataset), "--out", str(checkpoint), "--seed", "0",
+                "--objective", kind.objective, env={"OMP_NUM_THREADS": str(TRAIN_THREADS)})
     TRAINED_DIR.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(checkpoint, TRAINED_DIR / f"{part}.pt")
-    print(f"installed {TRAINED_DIR / part}.pt", flush=True)
-
-
-def test_path(part: str) -> Path:
-    """Where the card's test figures of ``part``'s shipped model are kept."""
-    return TRAINED_DIR / f"{part}.test.json"
+    shutil.copyfile(checkpoint, kind.model(part))
+    print(f"installed {kind.model(part)}", flush=True)
 
 
 def weights_sha256(path: Path) -> str:
@@ -84,43 +121,61 @@ def weights_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
-def test_model(part: str, samples: int, data: Path, work: Path, workers: int) -> None:
+def test_model(kind: ModelKind, part: str, samples: int, data: Path, work: Path,
+               workers: int) -> None:
     """Collect the part's test piles (another seed) and score the installed model on them."""
-    test_data = data / f"{part}_test"
-    run_command("collect", "--part", part, "--samples", str(samples), "--out", str(test_data),
-                "--seed", str(TEST_SEED), "--workers", str(workers))
-    model = TRAINED_DIR / f"{part}.pt"
-    figures = work / f"{part}.test.json"
+    test_data = data / f"{part}{kind.data_suffix}_test"
+    run_command("collect", *kind.collect, "--part", part, "--samples", str(samples), "--out",
+                str(test_data), "--seed", str(TEST_SEED), "--workers", str(workers))
+    model = kind.model(part)
+    figures = work / f"{part}{kind.suffix}.test.json"
     run_command("evaluate", "--data", str(test_data), "--model", str(model), "--json",
                 str(figures), env={"OMP_NUM_THREADS": str(TRAIN_THREADS)})
     record = {"weights_sha256": weights_sha256(model), "seed": TEST_SEED,
               "evaluation": json.loads(figures.read_text())}
-    test_path(part).write_text(json.dumps(record, indent=1) + "\n")
-    print(f"wrote {test_path(part)}", flush=True)
+    kind.test_record(part).write_text(json.dumps(record, indent=1) + "\n")
+    print(f"wrote {kind.test_record(part)}", flush=True)
 
 
-def test_rows(part: str) -> tuple[str, dict[str, str]] | None:
+def test_rows(kind: ModelKind, part: str) -> tuple[str, dict[str, str]] | None:
     """The card's test row of ``part`` and its right-% by cause, if its model was tested."""
-    path, model = test_path(part), TRAINED_DIR / f"{part}.pt"
+    path, model = kind.test_record(part), kind.model(part)
     if not path.is_file():
         return None
     record = json.loads(path.read_text())
     if record.get("weights_sha256") != weights_sha256(model):
-        raise TangleDrakeError(f"{path} tested another {model}; run --test-only --parts {part}")
+        raise TangleDrakeError(f"{path} tested another {model}; run --test-only --parts {part}"
+                               f" --objective {kind.objective}")
     return test_row(part, record["evaluation"])
 
 
 def write_card(parts: list[str]) -> None:
-    """The model card: what each shipped model was trained on, how well it validates, and the
-    commands that reproduce it."""
-    shipped = [part for part in parts if (TRAINED_DIR / f"{part}.pt").is_file()]
+    """The model card: what each shipped model was trained on, how well it validates and
+    tests, and the commands that reproduce it."""
+    tangled = KINDS["tangled"]
+    shipped = [part for part in parts if tangled.model(part).is_file()]
     if not shipped:
         raise TangleDrakeError(f"no trained models in {TRAINED_DIR} to describe")
-    rows = [validation_row(TRAINED_DIR / f"{part}.pt") for part in shipped]
-    tested = {part: found for part in shipped if (found := test_rows(part)) is not None}
+    rows = [validation_row(tangled.model(part)) for part in shipped]
+    tested = {part: found for part in shipped if (found := test_rows(tangled, part))}
     CARD.write_text(CARD_TEMPLATE.format(header=VALIDATION_HEADER, rows="\n".join(rows),
-                                         test=test_section(tested)))
+                                         test=test_section(tested),
+                                         success=success_section(parts)))
     print(f"wrote {CARD}")
+
+
+def success_section(parts: list[str]) -> str:
+    """The card's section on the shipped success/failure CNNs (none: a line saying so)."""
+    kind = KINDS["success"]
+    shipped = [part for part in parts if kind.model(part).is_file()]
+    if not shipped:
+        return "No success/failure CNN is shipped yet."
+    tested = [found[0] for part in shipped if (found := test_rows(kind, part))]
+    lines = [SUCCESS_INTRO, "", validation_header(kind.failure),
+             *(validation_row(kind.model(part)) for part in shipped), ""]
+    if tested:
+        lines += [SUCCESS_TEST, "", test_header(kind.failure), *tested, ""]
+    return "\n".join([*lines, SUCCESS_HOW])
 
 
 def test_section(tested: dict[str, tuple[str, dict[str, str]]]) -> str:
@@ -136,6 +191,35 @@ def test_section(tested: dict[str, tuple[str, dict[str, str]]]) -> str:
                  for cause in causes]
     return "\n".join([TEST_HEADER, *(found[0] for found in tested.values()), "",
                       TEST_BY_CAUSE, "", *by_cause])
+
+
+SUCCESS_INTRO = """\
+The seed's second baseline (Matsumura et al. 2018): the same network and crop, trained with
+`train --objective success` on physical-pick data (`collect --label pick`: graspability's top
+five candidates of each pile picked one by one with the simulated fingers, under randomised
+physics) to tell success (exactly one part came up) from failure (several parts, or none).
+`bench --methods success-cnn` and `demo --model` rank by its P(success). Its failures include
+the empty grasps that the auto-lift label never sees.\
+"""
+
+SUCCESS_TEST = """\
+Test on physical picks from piles of another collection seed (`tangle-drake evaluate`, every
+pick with its natural share of failures):\
+"""
+
+SUCCESS_HOW = """
+```bash
+tangle-drake collect --label pick --part PART --samples N --out data/PART_pick --seed 0
+OMP_NUM_THREADS=1 tangle-drake train --data data/PART_pick --objective success \\
+    --out out/trained/PART.success.pt --seed 0
+cp out/trained/PART.success.pt tangle_drake/trained/PART.success.pt
+tangle-drake collect --label pick --part PART --samples T --out data/PART_pick_test --seed 1
+tangle-drake evaluate --data data/PART_pick_test --model tangle_drake/trained/PART.success.pt
+```
+
+(`python tools/make_trained_models.py --objective success --parts PART --samples N
+--test-samples T` runs them.)\
+"""
 
 
 TEST_BY_CAUSE = """\
@@ -173,6 +257,10 @@ share of tangles; balanced accuracy is the mean of the two classes' recalls, com
 the validation accuracy):
 
 {test}
+
+## Success/failure models
+
+{success}
 
 ## How they were made
 
@@ -266,15 +354,19 @@ def main() -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--test-samples", type=int, default=1000,
                         help="samples per part of the test piles (default 1000)")
+    parser.add_argument("--objective", choices=list(KINDS), default="tangled",
+                        help="tangled (default): the tangle CNNs, from auto-lift data; success: "
+                             "the success/failure CNNs, from physical-pick data")
     parser.add_argument("--card-only", action="store_true",
                         help="only rewrite the model card from the installed models")
     parser.add_argument("--test-only", action="store_true",
                         help="only test the installed models (then rewrite the card)")
     args = parser.parse_args()
+    kind = KINDS[args.objective]
     for part in [] if args.card_only else args.parts:
         if not args.test_only:
-            make_model(part, args.samples, args.data, args.work, args.workers)
-        test_model(part, args.test_samples, args.data, args.work, args.workers)
+            make_model(kind, part, args.samples, args.data, args.work, args.workers)
+        test_model(kind, part, args.test_samples, args.data, args.work, args.workers)
     write_card(list(BUILTIN_PARTS))
     return 0
 

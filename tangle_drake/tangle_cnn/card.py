@@ -9,16 +9,24 @@ from pathlib import Path
 from tangle_drake.bench.stats import wilson
 from tangle_drake.tangle_cnn.checkpoint import MODEL_KIND, read_checkpoint
 
-VALIDATION_HEADER = (
-    "| part | samples | tangled % | piles | train / validation samples (balanced) "
-    "| epoch chosen | val loss | val accuracy % [95 % interval] | precision % (tangled) "
-    "| recall % (tangled) "
-    "| ROC-AUC | size |\n" + "|---" * 12 + "|")
 
-TEST_HEADER = (
-    "| part | test samples | tangled % | piles | accuracy % [95 % interval] "
-    "| balanced accuracy % | precision % (tangled) | recall % (tangled) | ROC-AUC |\n"
-    + "|---" * 9 + "|")
+def validation_header(failure: str = "tangled") -> str:
+    """:func:`validation_row`'s header; ``failure`` names the model's class 1 (``failure`` for
+    a success/failure model)."""
+    return (f"| part | samples | {failure} % | piles | train / validation samples (balanced) "
+            f"| epoch chosen | val loss | val accuracy % [95 % interval] | precision % ({failure}) "
+            f"| recall % ({failure}) | ROC-AUC | size |\n" + "|---" * 12 + "|")
+
+
+def test_header(failure: str = "tangled") -> str:
+    """:func:`test_row`'s header (``failure`` as in :func:`validation_header`)."""
+    return (f"| part | test samples | {failure} % | piles | accuracy % [95 % interval] "
+            f"| balanced accuracy % | precision % ({failure}) | recall % ({failure}) | ROC-AUC |\n"
+            + "|---" * 9 + "|")
+
+
+VALIDATION_HEADER = validation_header()
+TEST_HEADER = test_header()
 
 
 def pct(value: float | None) -> str:
