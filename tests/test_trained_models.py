@@ -3,6 +3,7 @@ network, described truthfully by the model card (validation and test figures).""
 
 import importlib.util
 import json
+import sys
 from dataclasses import asdict, replace
 from pathlib import Path
 
@@ -19,6 +20,15 @@ from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
 from tangle_drake.tangle_cnn.target_mask import TargetMask
 
 TOOL = Path(__file__).resolve().parent.parent / "tools" / "make_trained_models.py"
+
+
+def load_tool():
+    """``tools/make_trained_models.py`` as a module (registered, as its dataclasses need)."""
+    spec = importlib.util.spec_from_file_location("make_trained_models", TOOL)
+    tool = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = tool
+    spec.loader.exec_module(tool)
+    return tool
 
 
 @pytest.mark.parametrize("part", BUILTIN_PARTS)
@@ -43,15 +53,30 @@ def test_each_built_in_part_ships_a_model_made_for_todays_crop_and_gripper(part)
 
 
 def test_the_model_card_says_what_the_shipped_files_hold():
-    spec = importlib.util.spec_from_file_location("make_trained_models", TOOL)
-    tool = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tool)
+    tool = load_tool()
     card = (TRAINED_DIR / "README.md").read_text()
     for part in BUILTIN_PARTS:
         assert validation_row(trained_model_path(part)) in card, part
-        tested = tool.test_rows(part)  # raises if the figures belong to another model file
+        tested = tool.test_rows(tool.KINDS["tangled"], part)  # raises for another file's figures
         assert tested is not None, f"{part}: the shipped model was not tested"
         assert tested[0] in card, part
+
+
+@pytest.mark.parametrize("part", BUILTIN_PARTS)
+def test_a_shipped_success_cnn_is_one_that_success_cnn_picks_with_and_the_card_describes(part):
+    path = trained_model_path(part, "success")
+    if not path.is_file():
+        pytest.skip(f"no success/failure CNN is shipped for {part}")
+    model = load_tangle_model(path)
+    assert model.objective.name == "success" and model.info["part"] == part
+    assert model.crop == DEFAULT_CROP
+    assert model.info["data"]["manifest"]["label"] == "pick"  # learnt from physical picks
+    assert resolve_tangle_choice(part, "success-cnn").model == path
+    tool = load_tool()
+    card = (TRAINED_DIR / "README.md").read_text()
+    assert validation_row(path) in card
+    tested = tool.test_rows(tool.KINDS["success"], part)
+    assert tested is not None and tested[0] in card, f"{part}: the success CNN was not tested"
 
 
 def test_a_part_file_picks_with_the_model_teach_wrote_beside_it(tmp_path):

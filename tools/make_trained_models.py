@@ -41,7 +41,7 @@ from pathlib import Path
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts.catalog import BUILTIN_PARTS
-from tangle_drake.pick.selection import TRAINED_DIR
+from tangle_drake.pick.selection import TRAINED_DIR, trained_model_path
 from tangle_drake.tangle_cnn.card import (
     TEST_HEADER,
     VALIDATION_HEADER,
@@ -65,8 +65,6 @@ class ModelKind:
 
     objective: str
     """``train --objective``."""
-    suffix: str
-    """Of the installed file's stem: ``trained/P{suffix}.pt``."""
     collect: tuple[str, ...]
     """``collect``'s extra arguments."""
     data_suffix: str
@@ -75,15 +73,16 @@ class ModelKind:
     """The name of the model's class 1, for the card."""
 
     def model(self, part: str) -> Path:
-        return TRAINED_DIR / f"{part}{self.suffix}.pt"
+        """Where ``part``'s shipped model is installed (and the demo and bench look for it)."""
+        return trained_model_path(part, self.objective)
 
     def test_record(self, part: str) -> Path:
         """Where the card's test figures of ``part``'s shipped model are kept."""
-        return TRAINED_DIR / f"{part}{self.suffix}.test.json"
+        return self.model(part).with_suffix(".test.json")
 
 
-KINDS = {"tangled": ModelKind("tangled", "", (), "", "tangled"),
-         "success": ModelKind("success", ".success", ("--label", "pick"), "_pick", "failure")}
+KINDS = {"tangled": ModelKind("tangled", (), "", "tangled"),
+         "success": ModelKind("success", ("--label", "pick"), "_pick", "failure")}
 
 
 
@@ -103,7 +102,7 @@ def make_model(kind: ModelKind, part: str, samples: int, data: Path, work: Path,
     dataset = data / f"{part}{kind.data_suffix}"
     run_command("collect", *kind.collect, "--part", part, "--samples", str(samples), "--out",
                 str(dataset), "--seed", "0", "--workers", str(workers))
-    checkpoint = work / f"{part}{kind.suffix}.pt"
+    checkpoint = work / kind.model(part).name
     run_command("train", "--data", str(dataset), "--out", str(checkpoint), "--seed", "0",
                 "--objective", kind.objective, env={"OMP_NUM_THREADS": str(TRAIN_THREADS)})
     TRAINED_DIR.mkdir(parents=True, exist_ok=True)
@@ -128,7 +127,7 @@ def test_model(kind: ModelKind, part: str, samples: int, data: Path, work: Path,
     run_command("collect", *kind.collect, "--part", part, "--samples", str(samples), "--out",
                 str(test_data), "--seed", str(TEST_SEED), "--workers", str(workers))
     model = kind.model(part)
-    figures = work / f"{part}{kind.suffix}.test.json"
+    figures = work / kind.test_record(part).name
     run_command("evaluate", "--data", str(test_data), "--model", str(model), "--json",
                 str(figures), env={"OMP_NUM_THREADS": str(TRAIN_THREADS)})
     record = {"weights_sha256": weights_sha256(model), "seed": TEST_SEED,
