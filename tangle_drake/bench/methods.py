@@ -95,7 +95,7 @@ def parse_method(text: str) -> Method:
         return Method(f"{MODEL_PREFIX}{path}", default_rule(path), path.resolve())
     if text not in RULES:
         raise TangleDrakeError(f"unknown method {text!r}; choose from "
-                               f"{', '.join(DEFAULT_METHODS)} or model:PATH")
+                               f"{', '.join(RULES)} or model:PATH")
     return Method(text, text)
 
 

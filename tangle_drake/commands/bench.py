@@ -23,9 +23,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "plots into --out; run the same command again to resume.")
     parser.add_argument("--methods", nargs="+", default=None, metavar="METHOD",
                         help="random (among graspability's top 5), graspability, cnn, "
-                             "harmonic (the paper), or model:PATH (harmonic with your "
-                             "checkpoint); default: random graspability cnn harmonic, leaving "
-                             "out, with a notice, a CNN method whose part has no trained model")
+                             "harmonic (the paper), success-cnn (the seed's success/failure "
+                             "baseline, trained/<part>.success.pt), success-harmonic (its "
+                             "P(success) with graspability), emap, emap-harmonic, or "
+                             "model:PATH (your checkpoint, with its own rule); default: random "
+                             "graspability cnn harmonic, leaving out, with a notice, a CNN "
+                             "method whose part has no trained model")
     parser.add_argument("--parts", "--part", nargs="+", default=None, metavar="PART",
                         dest="parts",
                         help="built-in parts or mesh files (default: every built-in part)")
