@@ -91,7 +91,11 @@ def test_figures_by_cause_partition_the_samples(trained, tmp_path):
 
 def test_few_samples_of_a_class_are_warned_of():
     assert few_samples_warning(FEW_PER_CLASS, FEW_PER_CLASS, "split") is None
-    assert "only 3 tangled and 500 untangled" in few_samples_warning(3, 500, "split")
+    assert "only 3 tangled and 500 not tangled" in few_samples_warning(3, 500, "split")
+    assert "only 3 failure and 500 success" in few_samples_warning(
+        3, 500, "split", ("success", "failure"))
+    assert "only 3 other than one part and 500 one part" in few_samples_warning(
+        3, 500, "split", ("one part", "several parts", "no part"))
     assert few_samples_warning(500, FEW_PER_CLASS - 1, "split") is not None
 
 
@@ -111,7 +115,7 @@ def test_cli_prints_and_writes_the_figures(trained, tmp_path, capsys):
                         "--json", str(out)) == 0
     captured = capsys.readouterr()
     assert "48 samples, 24 tangled" in captured.out and "ROC-AUC" in captured.out
-    assert "only 24 tangled and 24 untangled samples" in captured.err  # too few to trust
+    assert "only 24 tangled and 24 not tangled samples" in captured.err  # too few to trust
     figures = json.loads(out.read_text())
     assert figures["samples"] == 48 and 0.5 <= figures["accuracy"] <= 1
     (tmp_path / "file").write_text("")

@@ -53,7 +53,8 @@ def run(args: argparse.Namespace) -> int:
               f"{result.data_part}", file=sys.stderr)
     print(_report(result, model_path))
     if warning := few_samples_warning(result.tangled, result.samples - result.tangled,
-                                      f"the scored part of {args.data}"):
+                                      f"the scored part of {args.data}",
+                                      model.objective.classes):
         print(warning, file=sys.stderr)
     if args.json is not None:
         try:

@@ -72,10 +72,13 @@ FEW_PER_CLASS = 30
 split to the next (a handful of samples gives an AUC of 1.000 by luck)."""
 
 
-def few_samples_warning(tangled: int, untangled: int, what: str) -> str | None:
-    """A warning when ``what`` holds fewer than ``FEW_PER_CLASS`` samples of either class."""
-    if min(tangled, untangled) >= FEW_PER_CLASS:
+def few_samples_warning(bad: int, good: int, what: str,
+                        classes: tuple[str, ...] = ("not tangled", "tangled")) -> str | None:
+    """A warning when ``what`` holds fewer than ``FEW_PER_CLASS`` samples of the model's good
+    class (class 0 of ``classes``) or of the others."""
+    if min(bad, good) >= FEW_PER_CLASS:
         return None
-    return (f"warning: {what} holds only {tangled} tangled and {untangled} untangled samples; "
+    others = classes[1] if len(classes) == 2 else f"other than {classes[0]}"
+    return (f"warning: {what} holds only {bad} {others} and {good} {classes[0]} samples; "
             f"with fewer than {FEW_PER_CLASS} of a class its accuracy and ROC-AUC are "
             "unreliable (even 1.000 says little): collect more piles")

@@ -120,7 +120,7 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
         f"{len(data.validation)}; device {dev}")
     tangled = int((data.labels[data.validation] != 0).sum())
     if warning := few_samples_warning(tangled, len(data.validation) - tangled,
-                                      "the validation split"):
+                                      "the validation split", objective.classes):
         log(warning)
 
     while not (reason := _stop_reason(state, settings)):
