@@ -9,8 +9,11 @@ transient collision filter in the context: two locked bodies, or a locked body a
 bin, can exert nothing on each other, so only the queries go. Their contacts with the parts
 that stay free are kept: a dragged part meets an immovable neighbour instead of a movable one.
 
-Only parts inside the bin are frozen: a locked body touching geometry of the world body itself
-(the ground beside the station) crashes Drake's SAP (RobotLocomotion/drake#24773).
+With any body locked, Drake crashes on a contact that involves geometry of the world body itself
+(RobotLocomotion/drake#24773): here the ground, 0.8-0.9 m below the bin's floor. So only parts
+inside the bin are frozen, and while any is, the ground's contacts leave the queries too: a part
+knocked out of the bin during the lift falls through the floor instead of crashing the run (it
+plays no part in what the lift brings up either way). Without a freeze nothing changes.
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, SceneGraph
+from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, Role, SceneGraph
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import Body
 from pydrake.systems.framework import Context
@@ -52,6 +55,8 @@ class PileFreeze:
         self._bin_geometries = [
             geometry for index in plant.GetBodyIndices(plant.GetModelInstanceByName(BIN_MODEL))
             for geometry in plant.GetCollisionGeometriesForBody(plant.get_body(index))]
+        self._world_geometries = plant.GetCollisionGeometriesForBody(plant.world_body())
+        self._all_geometries = scene_graph.model_inspector().GetAllGeometryIds(Role.kProximity)
         self._frozen: list[int] = []
         self._filter = None
 
@@ -78,8 +83,11 @@ class PileFreeze:
         geometries = [g for n in parts for g in self._geometries[n]] + self._bin_geometries
         manager = self.scene_graph.collision_filter_manager(
             self.scene_graph.GetMyMutableContextFromRoot(root_context))
-        self._filter = manager.ApplyTransient(
-            CollisionFilterDeclaration().ExcludeWithin(GeometrySet(geometries)))
+        declaration = CollisionFilterDeclaration().ExcludeWithin(GeometrySet(geometries))
+        if self._world_geometries:
+            declaration.ExcludeBetween(GeometrySet(self._world_geometries),
+                                       GeometrySet(self._all_geometries))
+        self._filter = manager.ApplyTransient(declaration)
         self._frozen = list(parts)
 
     def thaw(self, root_context: Context) -> None:

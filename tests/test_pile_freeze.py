@@ -82,3 +82,26 @@ def test_a_part_outside_the_bin_is_never_frozen(sim):
     centres = freeze.centres(context)
     centres[0, :2] = (-1.0, -1.0)  # on the ground beside the station
     assert parts_beyond(centres, sim.scenario.bin, NEAR, 0.10) == [1]
+
+
+def test_a_part_on_the_ground_while_others_are_frozen_neither_crashes_nor_lands(sim):
+    # Drake crashes on a contact with world-body geometry while any body is locked
+    # (RobotLocomotion/drake#24773): a part knocked out of the bin must not end the run.
+    context = place(sim)
+    plant_context = sim.plant.GetMyMutableContextFromRoot(context)
+    sim.plant.SetFreeBodyPose(plant_context, sim.bodies[2], RigidTransform([1.0, 0.6, WIRE]))
+    assert any("ground" in str(pair) for pair in touching_geometries(sim, context))
+    freeze = PileFreeze(sim.plant, sim.station.scene_graph, sim.bodies)
+    freeze.freeze(context, [0, 1])
+    sim.simulator.AdvanceTo(context.get_time() + 0.1)
+    assert freeze.centres(context)[2, 2] < 0.0  # it fell through the floor, out of the way
+    freeze.thaw(context)
+
+
+def touching_geometries(sim: TangleDataSimulator, context) -> list[tuple[str, str]]:
+    """Names of the geometries in contact."""
+    query = sim.plant.get_geometry_query_input_port().Eval(
+        sim.plant.GetMyContextFromRoot(context))
+    inspector = query.inspector()
+    return [(inspector.GetName(p.id_A), inspector.GetName(p.id_B))
+            for p in query.ComputePointPairPenetration()]
