@@ -28,7 +28,11 @@ def bin_boxes(config: BinConfig) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     }
 
 
-def bin_sdf(config: BinConfig, name: str = "bin", stand: bool = True) -> str:
+BIN_MODEL = "bin"
+"""The bin's model instance in a station's plant."""
+
+
+def bin_sdf(config: BinConfig, name: str = BIN_MODEL, stand: bool = True) -> str:
     """SDFormat text of the box as one static model named ``name`` (welded to the world);
     ``stand=False`` leaves out the stand under it (the tray: a stand beside the bin would show
     in the top camera's view, which widens below the bin's floor)."""

@@ -26,11 +26,8 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import Body
 from pydrake.systems.framework import Context
 
-from tangle_drake.bin_model import inside_bin
+from tangle_drake.bin_model import BIN_MODEL, inside_bin
 from tangle_drake.scenario import BinConfig
-
-BIN_MODEL = "bin"
-"""The bin's model instance (``bin_model.bin_sdf``'s default name)."""
 
 
 def parts_beyond(centres: np.ndarray, bin_config: BinConfig, point_xy: np.ndarray,

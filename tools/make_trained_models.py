@@ -85,8 +85,6 @@ KINDS = {"tangled": ModelKind("tangled", (), "", "tangled"),
          "success": ModelKind("success", ("--label", "pick"), "_pick", "failure")}
 
 
-
-
 def run_command(*argv: str, env: dict[str, str] | None = None) -> None:
     """``tangle-drake argv...`` in a child process; stop on failure."""
     print("$ " + "".join(f"{k}={v} " for k, v in (env or {}).items()) + "tangle-drake " +
