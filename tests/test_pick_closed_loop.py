@@ -1,6 +1,7 @@
 """The closed loop of the pick state machine, with a stand-in manipulator and a stand-in scale:
 several => shake => one => delivered; several => shake => several => put back; nothing => a
-fresh look elsewhere; not sure => weighed again; K grasps without a delivery => give up; the
+fresh look elsewhere; not sure => weighed again; K grasps without a delivery => stir the bin,
+and after the stirs => give up; nothing to pick in a bin that is not empty => stir; the
 put-back stops where the load rests on the pile. And the rules alone."""
 
 import numpy as np
@@ -8,10 +9,11 @@ import pytest
 from pydrake.common.value import AbstractValue
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
-from pydrake.systems.primitives import ConstantVectorSource
+from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 from test_pick_planner import FakeMotion, candidate
 
 from tangle_drake.failures import FailureKind
+from tangle_drake.pick.bin_contents import BinContents
 from tangle_drake.pick.payload import PayloadEstimate, PayloadPhase, PayloadRequest
 from tangle_drake.pick.planner import Mode, PickPlanner, PickSettings
 from tangle_drake.pick.recovery import (
@@ -23,6 +25,7 @@ from tangle_drake.pick.recovery import (
     after_weighing,
     judge,
 )
+from tangle_drake.scenario import BinConfig
 
 PART_WEIGHT = 0.32
 GRIPPER = 4.22
@@ -74,13 +77,16 @@ class FakeScale(LeafSystem):
 
 
 def run(candidates, weighings, motion=None, width=0.003, picks=1, rest_drop=0.0,
-        recovery=None, duration=60.0):
+        recovery=None, duration=60.0, contents=None):
     motion = motion or FakeMotion()
     settings = PickSettings(max_picks=picks, recovery=recovery or RecoverySettings())
     builder = DiagramBuilder()
     planner = builder.AddSystem(PickPlanner(motion, settings))
     source = builder.AddSystem(_Candidates(candidates))
     builder.Connect(source.get_output_port(), planner.GetInputPort("candidates"))
+    if contents is not None:
+        view = builder.AddSystem(ConstantValueSource(AbstractValue.Make(contents)))
+        builder.Connect(view.get_output_port(), planner.GetInputPort("bin_contents"))
     measured = builder.AddSystem(ConstantVectorSource(np.zeros(4)))
     builder.Connect(measured.get_output_port(), planner.GetInputPort("arm.state_measured"))
     gripper = builder.AddSystem(ConstantVectorSource(np.array([width, 0.0])))
@@ -240,3 +246,59 @@ def test_a_simulated_closed_loop_pick_is_weighed_and_delivered_to_the_tray():
     assert tray[0] == 1  # the simulation's count, not the estimator's
     for other in run.records[:-1]:
         assert other.disposition in (Disposition.EMPTY, Disposition.PUT_BACK)
+
+
+def bin_view(occupied: bool) -> BinContents:
+    """What the camera sees in the default bin: nothing, or a part lying by the +x wall."""
+    heights = np.zeros((50, 70))
+    if occupied:
+        heights[45:48, 30:40] = 0.006
+    return BinContents(heights, (0.242, 0.082), 0.004, BinConfig())
+
+
+def test_a_bin_nothing_can_be_picked_from_is_stirred_and_looked_at_again():
+    motion = FakeMotion()
+    records, modes, _, _ = run([], [], motion, contents=bin_view(True))
+    assert motion.stirs == 2  # RecoverySettings.max_stirs
+    assert [r.failure for r in records] == [FailureKind.NO_CANDIDATE] * 3
+    assert [r.recoveries for r in records] == [[Recovery.STIR]] * 2 + [[]]
+    assert modes[:5] == [Mode.SETTLE, Mode.PERCEIVE, Mode.STIR, Mode.SETTLE, Mode.PERCEIVE]
+    assert modes[-1] is Mode.DONE
+
+
+def test_an_empty_bin_ends_the_run_without_a_stir():
+    motion = FakeMotion()
+    records, modes, _, _ = run([], [], motion, contents=bin_view(False))
+    (record,) = records
+    assert record.failure is FailureKind.NO_CANDIDATE and "looks empty" in record.reason
+    assert motion.stirs == 0 and Mode.STIR not in modes
+
+
+def test_grasps_that_keep_coming_up_empty_stir_the_bin_which_is_then_tried_afresh():
+    motion = FakeMotion()
+    records, modes, _, _ = run([candidate(0, 0.9), candidate(1, 0.8)], [0, 0, 1], motion,
+                               recovery=RecoverySettings(max_attempts=2, max_stirs=1),
+                               contents=bin_view(True))
+    assert [r.disposition for r in records] == [Disposition.EMPTY, Disposition.EMPTY,
+                                                Disposition.DELIVERED]
+    assert records[1].recoveries == [Recovery.STIR] and motion.stirs == 1
+    assert motion.planned == [0, 1, 0]  # the stir changed the pile: the spot is tried again
+    assert Mode.STIR in modes
+
+
+def test_stirs_without_a_delivery_end_in_giving_up():
+    motion = FakeMotion()
+    records, modes, _, _ = run([candidate(0, 0.9), candidate(1, 0.8)], [0] * 8, motion,
+                               recovery=RecoverySettings(max_attempts=2, max_stirs=1),
+                               contents=bin_view(True), picks=3)
+    assert motion.stirs == 1 and len(records) == 5
+    last = records[-1]
+    assert last.failure is FailureKind.GAVE_UP and modes[-1] is Mode.DONE
+    assert "2 grasps in a row" in last.reason and "1 stir since" in last.reason
+
+
+def test_without_stirs_a_bin_nothing_can_be_picked_from_ends_the_run():
+    motion = FakeMotion()
+    records, _, _, _ = run([], [], motion, contents=bin_view(True),
+                           recovery=RecoverySettings(max_stirs=0))
+    assert len(records) == 1 and motion.stirs == 0

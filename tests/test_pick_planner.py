@@ -48,7 +48,7 @@ class FakeMotion:
         self.unreachable = unreachable
         self.colliding = colliding
         self.planned: list[int] = []
-        self.shakes = self.lowered = 0
+        self.shakes = self.lowered = self.stirs = 0
 
     def hold_command(self, measured: np.ndarray) -> np.ndarray:
         return np.asarray(measured[:2]).copy()
@@ -75,6 +75,10 @@ class FakeMotion:
 
     def plan_line(self, start, end):
         return rest_to_rest(start, end, 1.0, 1.5)
+
+    def plan_stir(self, hold, poses, speed):
+        self.stirs += 1
+        return rest_to_rest(hold, np.asarray(hold) + 0.05, 1.0, 1.5)
 
 
 class CountingCandidates(LeafSystem):

@@ -4,10 +4,11 @@ Per method and part, and per method over all parts: parts delivered to the tray;
 (grasps after which parts landed in the tray, counted by the simulation) with exactly one
 part and with several; several read as one (delivered on the estimator's "one part" while
 several came up, were held up through contacts at the weighing, or landed); weighings made
-while a held part still rested on the pile (the wrist then reads light); grasps per delivered
-part; shakes and put-backs; parts left in the bin and lost (in neither bin nor tray, by where
-they fell from and the planner's mode then); the share of the bin cleared; delivered parts per hour
-of simulated time plus computation. Rates come with 95 % bootstrap intervals over bins.
+while a held part still rested on the pile (the wrist then reads light); grasps (not looks
+that found nothing to pick) per delivered part; shakes, put-backs and stirs of the bin; parts
+left in the bin and lost (in neither bin nor tray, by where they fell from and the planner's
+mode then); the share of the bin cleared; delivered parts per hour of simulated time plus
+computation. Rates come with 95 % bootstrap intervals over bins.
 """
 
 from __future__ import annotations
@@ -42,8 +43,9 @@ def _counts(runs: Sequence[dict]) -> dict:
             g["landed"] >= 2 or max(g["lifted"] or 0, g.get("held") or 0) >= 2)
             for g in grasps),
         "weighed_resting": sum((g.get("resting") or 0) > 0 for g in grasps),
-        "grasps": len(grasps),
+        "grasps": sum(g["outcome"] != "FAILED" for g in grasps),
         "shakes": sum(r in ("SHAKE", "SHAKE_OFF") for g in grasps for r in g["recoveries"]),
+        "stirs": sum(r == "STIR" for g in grasps for r in g["recoveries"]),
         "put_backs": sum(g["disposition"] == "PUT_BACK" for g in grasps),
         "empty": sum(g["disposition"] == "EMPTY" or g["outcome"] == "NONE" for g in grasps),
         "gave_up": sum(g["failure"] == "gave up" for g in grasps),
@@ -124,14 +126,13 @@ def _row(name: str, f: dict) -> str:
             f"({_pct(f['cleared'])}) | {f['deliveries']} | "
             f"{_pct(f['exactly_one_rate'], f['exactly_one_rate_ci'])} | {f['several']} | "
             f"{f['several_read_as_one']} | {f['weighed_resting']} | {gpp} | {f['shakes']} | "
-            f"{f['put_backs']} | "
-            f"{f['left_in_bin']} | {f['lost']} | {pph} |")
+            f"{f['put_backs']} | {f['stirs']} | {f['left_in_bin']} | {f['lost']} | {pph} |")
 
 
 _HEADER = ["| method | bins | delivered / parts (cleared) | deliveries | exactly one part "
            "[95 % CI] | several | several read as one | weighed while resting | grasps per "
-           "part | shakes | put-backs | left in bin | lost | parts per hour [95 % CI] |",
-           "|---" * 14 + "|"]
+           "part | shakes | put-backs | stirs | left in bin | lost | parts per hour [95 % CI] |",
+           "|---" * 15 + "|"]
 
 
 def _lost_lines(by_method: dict, methods: Sequence[str]) -> list[str]:

@@ -30,6 +30,7 @@ from tangle_drake.graspability.system import GraspabilitySystem
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.parts import load_part
 from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_spec
+from tangle_drake.pick.bin_contents import BinContentsSystem
 from tangle_drake.pick.load_path import LoadPathMonitor
 from tangle_drake.pick.outcome import LiftMonitor, TrayMonitor
 from tangle_drake.pick.payload import PayloadEstimator, PayloadSettings
@@ -215,6 +216,11 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
     payload = None
     if planner_settings.recovery is not None:
         payload = _add_payload(builder, scenario, station, planner, motion)
+        contents = builder.AddNamedSystem("bin_contents", BinContentsSystem(camera,
+                                                                            scenario.bin))
+        builder.Connect(depth, contents.GetInputPort("depth_image"))
+        builder.Connect(contents.GetOutputPort("bin_contents"),
+                        planner.GetInputPort("bin_contents"))
     monitor = tray = None
     if isinstance(station, SimulatedStation):
         poses = station.GetOutputPort("sim.body_poses")

@@ -40,6 +40,9 @@ class Mode(enum.Enum):
     RELEASE = "release"
     HOME = "home"
     RETREAT = "retreat"
+    STIR = "stir"
+    """Closed loop: the closed fingers sweep through what is left in the bin (nothing could
+    be picked as it lay), then home for a fresh look."""
     STOPPED = "stopped"
     """The station reported a safety stop: the pick in progress was abandoned."""
     DONE = "done"
@@ -125,7 +128,14 @@ class Loop:
     """Looks in a row, during the put-back, that found the load resting on the pile."""
     deliveries: int = 0
     attempts: int = 0
-    """Grasps since the last delivery."""
+    """Grasps since the last delivery or stir."""
+    stirs: int = 0
+    """Stirs of the bin since the last delivery."""
+    stir_due: bool = False
+    """The next look stirs the bin instead of picking (too many grasps came up empty)."""
+    can_stir: bool = False
+    """The planner sees the bin's contents (its ``bin_contents`` input is connected) and
+    may stir (``RecoverySettings.max_stirs``)."""
 
 
 @dataclass(frozen=True)

@@ -114,7 +114,9 @@ class PickRecord:
     verdict: Verdict | None = None
     """Closed loop: what that weighing (and the fingers) said came up."""
     recoveries: list[Recovery] = field(default_factory=list)
-    """Closed loop: what was done about it, in order (weighing again, shaking, putting back)."""
+    """Closed loop: what was done about it, in order (weighing again, shaking, putting back;
+    stirring the bin, after a look that found nothing to pick or the last of
+    ``RecoverySettings.max_attempts`` grasps without a delivery)."""
     disposition: Disposition | None = None
     """Closed loop: how the grasp ended (delivered to the tray, empty, put back)."""
     crop: np.ndarray | None = None
@@ -141,8 +143,10 @@ class PickRecord:
         if self.disposition is not None:
             weighed = "" if self.estimate is None or not self.estimate.ready else (
                 f"weighed {self.estimate.parts:.2f} parts, ")
-            steps = "".join(f"{r.value}, " for r in self.recoveries)
+            steps = "".join(f"{r.value}, " for r in self.recoveries if r is not Recovery.STIR)
             tried += f" | {weighed}{steps}{self.disposition.value}"
+        if Recovery.STIR in self.recoveries:
+            tried += f" | then {Recovery.STIR.value}"
         return (f"pick {self.index}: {what}{tried} | perception {self.perception_s * 1e3:.0f} ms, "
                 f"CNN {self.cnn_s * 1e3:.0f} ms, planning {self.planning_s * 1e3:.0f} ms, "
                 f"execution {self.execution_s:.1f} s")

@@ -11,6 +11,7 @@ Closed loop (``recovery`` set; :mod:`.recovery` says what follows a weighing)::
                                                                +-> RETREAT (nothing came up)
                         WEIGH again <- SHAKE <-----------------+
                         PUT_BACK -> OPEN -> WEIGH_OPEN (-> SHAKE_OFF) -> RAISE -> RETREAT
+    PERCEIVE -> STIR -> SETTLE   (nothing to pick, or max_attempts grasps without a delivery)
 
 SETTLE waits for the pile to come to rest (after the start, or the last pick). PERCEIVE reads
 the perception inputs (so the camera renders, the graspability index and the CNN run, only
@@ -29,7 +30,10 @@ up empty is not tried again while the pile there is unchanged. Open loop, after
 ``max_picks`` picks the planner is DONE; closed loop, after ``max_picks`` deliveries, or
 ``recovery.max_attempts`` grasps in a row without one (it gives up). When nothing can be
 picked (no candidate, none reachable: the next look would see the same pile) it is DONE too,
-and holds still.
+and holds still; closed loop, with the ``bin_contents`` input connected, it first stirs the
+bin (STIR: the closed fingers sweep through what is left, :mod:`.stir`) if the bin does not
+look empty, and so it does after ``recovery.max_attempts`` grasps in a row without a delivery;
+after ``recovery.max_stirs`` stirs without a delivery it gives up.
 
 On hardware the station's ``safety.fault`` may stop the robot at any time (stale status, a
 command past a limit): the planner records the pick in progress as failed, STOPPED, and holds
@@ -58,6 +62,10 @@ port                         dir    value
 ``payload``                  in     closed loop: the ``PayloadEstimator``'s estimate
 ``wrist.force_torque``       in     closed loop: the wrist sensor (the put-back's force limit)
 ``safety.fault``             in     optional, hardware: 1 after the station's safety stop
+``bin_contents``             in     optional, closed loop: what the camera sees left in the
+                                    bin (:class:`~tangle_drake.pick.bin_contents.BinContents`);
+                                    when connected, the planner stirs a bin it cannot pick
+                                    from instead of stopping
 ``depth_image``              in     optional, with ``settings.record_crop`` or
                                     ``record_view``: the camera's depth image, cropped into
                                     (or kept in) each record
@@ -91,7 +99,7 @@ from tangle_drake.crops import candidate_crops
 from tangle_drake.failures import FailureKind, pick_failure
 from tangle_drake.pick.choose import EmptyGrasp, choose, rank_scored
 from tangle_drake.pick.closed_loop import FALLBACK, ClosedLoop
-from tangle_drake.pick.modes import Mode, PickSettings, PlannerState
+from tangle_drake.pick.modes import Loop, Mode, PickSettings, PlannerState
 from tangle_drake.pick.outcome import (
     VIEW_CANDIDATES,
     Outcome,
@@ -100,8 +108,9 @@ from tangle_drake.pick.outcome import (
     classify_lift,
 )
 from tangle_drake.pick.payload import PayloadEstimate, PayloadPhase, PayloadRequest
-from tangle_drake.pick.recovery import Disposition
-from tangle_drake.planning.motion import Motion
+from tangle_drake.pick.recovery import Disposition, Recovery
+from tangle_drake.pick.stir import looks_empty, stir_line, stir_poses
+from tangle_drake.planning.motion import Motion, PlanningError
 from tangle_drake.tangle_cnn.selection import ScoredCandidate
 
 __all__ = ["Mode", "PickPlanner", "PickSettings", "rank_scored"]
@@ -109,7 +118,7 @@ __all__ = ["Mode", "PickPlanner", "PickSettings", "rank_scored"]
 _PLANNED = {Mode.APPROACH: "approach", Mode.DESCEND: "descend", Mode.LIFT: "lift",
             Mode.TRANSFER: "transfer", Mode.HOME: "home", Mode.RETREAT: "retreat"}
 """Moving modes that play a trajectory of the pick's ``PickMotion``."""
-_MOVING = (*_PLANNED, Mode.SHAKE, Mode.PUT_BACK, Mode.SHAKE_OFF, Mode.RAISE)
+_MOVING = (*_PLANNED, Mode.SHAKE, Mode.PUT_BACK, Mode.SHAKE_OFF, Mode.RAISE, Mode.STIR)
 """Every mode that plays a trajectory (the others are planned when they begin)."""
 
 
@@ -142,6 +151,8 @@ class PickPlanner(ClosedLoop, LeafSystem):
         self._depth = self.DeclareAbstractInputPort("depth_image",
                                                     AbstractValue.Make(ImageDepth32F()))
         self._image_time = self.DeclareVectorInputPort("camera.image_time", 1)
+        self._contents = self.DeclareAbstractInputPort("bin_contents",
+                                                       AbstractValue.Make(None))
         self._state = self.DeclareAbstractState(AbstractValue.Make(
             PlannerState(Mode.SETTLE, 0.0, np.zeros(motion.command_size),
                          self._settings.open_width)))
@@ -185,7 +196,11 @@ class PickPlanner(ClosedLoop, LeafSystem):
 
     def _initialize(self, context: Context, state: State) -> None:
         hold = self._motion.hold_command(self._measured.Eval(context))
-        self._set(state, replace(self._get(context), since=context.get_time(), hold=hold))
+        s = self._get(context)
+        can_stir = self._recovery is not None and self._recovery.max_stirs > 0 \
+            and self._contents.HasValue(context)
+        self._set(state, replace(s, since=context.get_time(), hold=hold,
+                                 loop=replace(s.loop, can_stir=can_stir)))
 
     def _set(self, state: State, value: PlannerState) -> None:
         state.get_mutable_abstract_state(self._state).set_value(value)
@@ -241,7 +256,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
                 Mode.LIFT: Mode.WEIGH if closed else Mode.CHECK, Mode.TRANSFER: Mode.RELEASE,
                 Mode.HOME: Mode.SETTLE, Mode.RETREAT: Mode.SETTLE, Mode.SHAKE: Mode.WEIGH,
                 Mode.PUT_BACK: Mode.OPEN, Mode.SHAKE_OFF: Mode.WEIGH_OPEN,
-                Mode.RAISE: Mode.RETREAT}[mode]
+                Mode.RAISE: Mode.RETREAT, Mode.STIR: Mode.SETTLE}[mode]
 
     def _enter(self, mode: Mode, s: PlannerState, t: float) -> PlannerState:
         """Switch to ``mode`` at time ``t``, holding where the last trajectory ended."""
@@ -261,7 +276,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
             s = replace(s, trajectory=trajectory)
         if mode is Mode.OPEN or (mode is Mode.RELEASE and self._recovery is None):
             s = replace(s, width=self._settings.open_width)
-        if mode is Mode.SETTLE:  # back home: the pick is over
+        if mode is Mode.SETTLE and s.record is not None:  # back home: the pick is over
             record = replace(s.record, execution_s=t - s.started, started_at=s.started)
             s = self._finish(replace(s, plan=None, record=None), record, t)
         return s
@@ -292,16 +307,20 @@ class PickPlanner(ClosedLoop, LeafSystem):
         return s.loop.deliveries >= self._settings.max_picks
 
     def _finish(self, s: PlannerState, record: PickRecord, t: float) -> PlannerState:
-        picks = (*s.picks, record)
         loop = s.loop
         if self._recovery is not None and record.outcome is not Outcome.FAILED:
             delivered = record.disposition is Disposition.DELIVERED
             loop = replace(loop, deliveries=loop.deliveries + delivered,
-                           attempts=0 if delivered else loop.attempts + 1)
+                           attempts=0 if delivered else loop.attempts + 1,
+                           stirs=0 if delivered else loop.stirs)
             if loop.attempts >= self._recovery.max_attempts:
-                picks = (*picks, PickRecord(
-                    index=len(picks) + 1, failure=FailureKind.GAVE_UP,
-                    reason=f"{loop.attempts} grasps in a row delivered nothing"))
+                if self._may_stir(loop):  # the next look stirs the bin instead
+                    record = replace(record, recoveries=[*record.recoveries, Recovery.STIR])
+                    loop = replace(loop, stir_due=True)
+                else:
+                    s = replace(s, picks=(*s.picks, record))
+                    record = self._gave_up(len(s.picks) + 1, loop)
+        picks = (*s.picks, record)
         s = replace(s, picks=picks, loop=replace(loop, reweighs=0, shakes=0, shakes_off=0))
         done = self._done(s) or picks[-1].outcome is Outcome.FAILED
         return replace(s, mode=Mode.DONE if done else s.mode, since=t)
@@ -327,6 +346,8 @@ class PickPlanner(ClosedLoop, LeafSystem):
 
     def _perceive(self, context: Context, s: PlannerState) -> PlannerState:
         t = context.get_time()
+        if s.loop.stir_due:
+            return self._stir(context, s, t, None)
         record = PickRecord(index=len(s.picks) + 1)
         start = time.perf_counter()
         candidates = list(self._candidates.Eval(context))
@@ -345,7 +366,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
         if not ranked:
             record.failure = FailureKind.NO_CANDIDATE
             record.reason = "no grasp candidate in the bin"
-            return self._finish(replace(s, mode=Mode.SETTLE), record, t)
+            return self._nothing_to_pick(context, s, record, t)
         plan = choose(record, ranked, self._motion, self._measured.Eval(context),
                       s.empty_grasps, self._settings.repeat_rule)
         if plan is None:
@@ -353,7 +374,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
             record.failure = pick_failure(kinds)
             record.reason = "no candidate can be picked (" + ", ".join(
                 f"{n} {kind.value}" for kind, n in kinds.items()) + ")"
-            return self._finish(replace(s, mode=Mode.SETTLE), record, t)
+            return self._nothing_to_pick(context, s, record, t)
         if self._settings.record_crop is not None and self._depth.HasValue(context):
             depth = np.asarray(self._depth.Eval(context).data)[:, :, 0]
             record.crop = candidate_crops(depth, self._intrinsics, [record.candidate],
@@ -361,6 +382,57 @@ class PickPlanner(ClosedLoop, LeafSystem):
         record.started_at = t
         s = replace(s, plan=plan, record=record, started=t, width=self._settings.open_width)
         return self._enter(Mode.APPROACH, s, t)
+
+    def _nothing_to_pick(self, context: Context, s: PlannerState, record: PickRecord,
+                         t: float) -> PlannerState:
+        """A look that found nothing to pick (``record``, failed): stir the bin where stirs
+        are left, else the run ends."""
+        if self._may_stir(s.loop):
+            return self._stir(context, s, t, record)
+        return self._finish(replace(s, mode=Mode.SETTLE), record, t)
+
+    def _may_stir(self, loop: Loop) -> bool:
+        return loop.can_stir and loop.stirs < self._recovery.max_stirs
+
+    def _stir(self, context: Context, s: PlannerState, t: float,
+              record: PickRecord | None) -> PlannerState:
+        """Sweep the closed fingers through what is left in the bin (:mod:`.stir`), then look
+        again. ``record`` is the look that found nothing to pick; ``None``: grasps that came
+        up empty asked for the stir. Where the bin looks empty or the sweep cannot be
+        planned, the run ends as it would have without stirring."""
+        settings = self._recovery.stir
+        contents = self._contents.Eval(context)
+        line = stir_line(contents, settings)
+        why = None
+        if line is None:
+            why = "the bin looks empty" if looks_empty(contents, settings) else \
+                "the bin is too small to stir"
+        else:
+            rim = contents.bin.floor_height + contents.bin.wall_height
+            try:
+                trajectory = self._motion.plan_stir(s.hold, stir_poses(line, rim),
+                                                    settings.speed)
+            except PlanningError as error:
+                why = f"the stir cannot be planned ({error})"
+        loop = replace(s.loop, stir_due=False)
+        if why is not None:
+            record = self._gave_up(len(s.picks) + 1, loop, why) if record is None else \
+                replace(record, reason=f"{record.reason}; {why}")
+            return self._finish(replace(s, mode=Mode.SETTLE, loop=loop), record, t)
+        picks = s.picks if record is None else \
+            (*s.picks, replace(record, recoveries=[*record.recoveries, Recovery.STIR]))
+        return replace(s, mode=Mode.STIR, since=t, trajectory=trajectory, width=0.0,
+                       picks=picks, empty_grasps=(),
+                       loop=replace(loop, stirs=loop.stirs + 1, attempts=0))
+
+    @staticmethod
+    def _gave_up(index: int, loop: Loop, why: str | None = None) -> PickRecord:
+        """The record of giving up on the bin."""
+        reason = f"{loop.attempts} grasps in a row delivered nothing"
+        if loop.stirs:
+            reason += f", {loop.stirs} stir{'s' * (loop.stirs > 1)} since the last delivery"
+        return PickRecord(index=index, failure=FailureKind.GAVE_UP,
+                          reason=reason if why is None else f"{reason}; {why}")
 
     @staticmethod
     def _empty(record: PickRecord) -> EmptyGrasp:

@@ -7,6 +7,10 @@
                        (a part may stay hooked on a finger: shake it off), back up, retreat
     not sure        -> weigh again; still not sure -> as several (never deliver a doubt)
 
+and with the bin: when a look finds nothing it can pick while the bin still holds something,
+or ``max_attempts`` grasps in a row delivered nothing, the fingers stir the bin (:mod:`.stir`)
+and the planner looks again; after ``max_stirs`` stirs without a delivery it gives up.
+
 The rules here are pure functions of what the planner knows, so they are tested without a
 simulator; :mod:`.planner` carries them out.
 """
@@ -14,9 +18,10 @@ simulator; :mod:`.planner` carries them out.
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from tangle_drake.pick.payload import PayloadEstimate
+from tangle_drake.pick.stir import StirSettings
 
 
 class Verdict(enum.Enum):
@@ -35,6 +40,9 @@ class Recovery(enum.Enum):
     SHAKE = "shaken"
     PUT_BACK = "lowered to the pile and opened"
     SHAKE_OFF = "shaken off a finger"
+    STIR = "stirred the bin"
+    """Nothing could be picked from the pile as it lay (no candidate, none that could be
+    picked, or ``max_attempts`` grasps without a delivery): the fingers swept through it."""
 
 
 class Disposition(enum.Enum):
@@ -57,7 +65,12 @@ class RecoverySettings:
     max_shakes: int = 1
     """Shakes of a load of several before it is put back."""
     max_attempts: int = 5
-    """Grasps in a row without a delivery before the planner gives up on the bin."""
+    """Grasps in a row without a delivery before the planner stirs the bin (or, with no stir
+    left, gives up on it)."""
+    max_stirs: int = 2
+    """Stirs of the bin without a delivery between them before the planner gives up; 0 never
+    stirs (a look that finds nothing to pick then ends the run)."""
+    stir: StirSettings = field(default_factory=StirSettings)
     tare_timeout: float = 1.5
     """The longest wait at the pre-grasp for a tare, s (then it descends untared and the
     weighing cannot be trusted)."""
@@ -72,10 +85,10 @@ class RecoverySettings:
     """...in this many of the planner's looks in a row (the sensor's noise is ~0.1 N)."""
 
     def __post_init__(self) -> None:
-        if min(self.max_reweighs, self.max_shakes) < 0 or min(self.max_attempts,
-                                                               self.put_back_samples) < 1:
-            raise ValueError("RecoverySettings: max_reweighs and max_shakes must be >= 0, "
-                             "max_attempts and put_back_samples >= 1")
+        if min(self.max_reweighs, self.max_shakes, self.max_stirs) < 0 or min(
+                self.max_attempts, self.put_back_samples) < 1:
+            raise ValueError("RecoverySettings: max_reweighs, max_shakes and max_stirs must be "
+                             ">= 0, max_attempts and put_back_samples >= 1")
         for name in ("tare_timeout", "weigh_timeout", "put_back_clearance", "put_back_force"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"RecoverySettings.{name} must be positive")

@@ -184,6 +184,38 @@ class ArmMotion:
         s = self.settings
         return rest_to_rest(start, end, s.velocity_limit, s.acceleration_limit)
 
+    def plan_stir(self, hold: np.ndarray, poses: list[np.ndarray],
+                  speed: float) -> PiecewisePolynomial:
+        """The sweep or its 180° twin (the palm is symmetric), the one nearer the current
+        wrist angle first: IK for each pose, straight Cartesian legs between them, checked
+        clear of the bin and the robot, then home."""
+        q_hold = self.model.full_q(hold)
+        current = self.model.tcp_pose(q_hold).rotation()
+        first = RigidTransform(np.asarray(poses[0], float))
+        errors = []
+        for twin in symmetric_grasps(first, current):
+            turn = first.rotation().inverse() @ twin.rotation()
+            turned = [RigidTransform(RigidTransform(np.asarray(X, float)).rotation() @ turn,
+                                     np.asarray(X, float)[:3, 3]) for X in poses]
+            try:
+                return self._stir(q_hold, turned, speed)
+            except PlanningError as error:
+                errors.append(error)
+        raise next((e for e in errors if e.kind is FailureKind.COLLISION), errors[0])
+
+    def _stir(self, q_hold: np.ndarray, poses: list[RigidTransform],
+              speed: float) -> PiecewisePolynomial:
+        above = self._solve(poses[0], q_hold, "stir's start", free=True)
+        path = [above]
+        for X in poses[1:-1]:
+            path.append(self._solve(X, path[-1], "stir", free=False))
+        path.append(self._solve(poses[-1], path[-1], "stir's end", free=True))
+        legs = [self._legs(self._straight(a, b, "stir"), speed)
+                for a, b in itertools.pairwise(path)]
+        return chain([self._legs(self._free_path([q_hold, above], None, "move to the stir")),
+                      *legs, self._legs(self._free_path([path[-1], self.q_home], None,
+                                                        "way home from the stir"))])
+
     def _solve(self, X_WT: RigidTransform, seed: np.ndarray, name: str, free: bool,
                free_yaw: bool = False) -> np.ndarray:
         """IK for one pose, clear of the bin and the robot.

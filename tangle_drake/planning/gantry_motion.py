@@ -8,6 +8,7 @@ trials need (``diagrams/floating_gripper.yaml``; ``tools/example_floating_grippe
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -127,6 +128,14 @@ class GantryMotion:
 
     def plan_line(self, start: np.ndarray, end: np.ndarray) -> PiecewisePolynomial:
         return _leg(np.asarray(start, float), np.asarray(end, float))
+
+    def plan_stir(self, hold_command: np.ndarray, poses: list[np.ndarray],
+                  speed: float) -> PiecewisePolynomial:
+        start = np.asarray(hold_command, float)
+        points = [self.command_for(RigidTransform(np.asarray(X, float)), start[3])
+                  for X in poses]
+        sweep = [_leg(a, b, speed) for a, b in itertools.pairwise(points)]
+        return chain([_leg(start, points[0], free=True), *sweep, _leg(points[-1], self.home)])
 
 
 def _leg(a: np.ndarray, b: np.ndarray, speed: float = math.inf,

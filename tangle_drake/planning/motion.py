@@ -100,3 +100,9 @@ class Motion(Protocol):
 
     def plan_line(self, start: np.ndarray, end: np.ndarray) -> PiecewisePolynomial:
         """A short move between two commands near each other (back up after a put-back)."""
+
+    def plan_stir(self, hold: np.ndarray, poses: list[np.ndarray],
+                  speed: float) -> PiecewisePolynomial:
+        """From ``hold`` to the first of the tool poses ``poses`` (4x4, a sweep through the
+        bin: :func:`~tangle_drake.pick.stir.stir_poses`), straight from each to the next with
+        the tool centre at ``speed`` m/s, then home; raises :class:`PlanningError`."""
