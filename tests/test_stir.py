@@ -175,3 +175,52 @@ def test_the_arm_sweeps_clear_of_the_bin_within_its_limits():
     for X in poses[1:3]:  # it passes the start and the end of the sweep
         assert min(np.linalg.norm(p - X[:3, 3]) for p in tips) < 0.003
     assert all(motion.model.clearance(motion.model.full_q(x)).to_bin >= -1e-4 for x in q)
+
+
+def test_a_stir_in_the_simulation_moves_parts_and_keeps_them_in_the_bin():
+    """The sweep, played on the simulated floating gripper over a small pile: the closed
+    fingers go down to the planned depth, push parts along, and no part leaves the bin or
+    is pressed into its floor."""
+    from dataclasses import replace
+
+    from pydrake.systems.analysis import Simulator
+
+    from tangle_drake.bin_model import inside_bin
+    from tangle_drake.drivers.limits import station_limits
+    from tangle_drake.pile import settle_pile
+    from tangle_drake.planning.gantry_motion import GantryMotion
+    from tangle_drake.scenario import PartCount
+    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.station import build_station, camera_model
+
+    scenario = resolve_scenario("floating_gripper.yaml")
+    scenario = replace(scenario, view_cameras=[],
+                       pile=replace(scenario.pile, parts=[PartCount("u_hook", 5)]))
+    station = build_station(scenario)
+    pile = settle_pile(station, scenario, seed=3)
+    simulator = Simulator(station)
+    context = simulator.get_mutable_context()
+    station.hold_still(context)
+    station.set_plant_state(context, pile.state)
+    station.GetInputPort("gripper.position").FixValue(context, [0.0])
+    simulator.Initialize()
+    depth = np.asarray(station.GetOutputPort("camera.depth_image").Eval(context).data)[:, :, 0]
+    line = stir_line(bin_contents(depth, camera_model(scenario), scenario.bin), SETTINGS)
+    assert line is not None
+    motion = GantryMotion(scenario.bin, station_limits(scenario))
+    hold = station.GetOutputPort("gantry.position_measured").Eval(context).copy()
+    rim = scenario.bin.floor_height + scenario.bin.wall_height
+    sweep = motion.plan_stir(hold, stir_poses(line, rim), SETTINGS.speed)
+    before = station.part_poses(context)[:, :3, 3]
+    start, lowest = context.get_time(), np.inf
+    while context.get_time() < start + sweep.end_time() + 0.5:
+        t = min(context.get_time() - start, sweep.end_time())
+        station.GetInputPort("gantry.position").FixValue(context, sweep.value(t).ravel())
+        simulator.AdvanceTo(context.get_time() + 0.02)
+        lowest = min(lowest, station.GetOutputPort("gantry.position_measured").Eval(context)[2])
+        assert station.part_poses(context)[:, 2, 3].min() > scenario.bin.floor_height - 0.001
+    after = station.part_poses(context)[:, :3, 3]
+    tips = lowest - DEFAULT_GRIPPER.reach  # the gantry's z is the flange's
+    assert tips == pytest.approx(line.start[2], abs=0.002)
+    assert np.linalg.norm(after - before, axis=1).max() > 0.01  # it moved something
+    assert inside_bin(scenario.bin, after).all()
