@@ -88,6 +88,23 @@ def test_pick_poses_press_in_clear_the_rim_and_lift_out_of_the_bin():
     assert np.allclose(poses.lift.translation()[:2], grasp[:2])
 
 
+def test_the_lift_ends_in_from_the_walls():
+    settings = ApproachSettings()
+    wall_x = BIN.center[0] + BIN.inner_size[0] / 2
+    near = top_down(wall_x - 0.02, BIN.center[1] - 0.05, BIN.floor_height + 0.02, 30.0)
+    poses = pick_poses(near, BIN, settings)
+    lift = poses.lift.translation()
+    assert np.isclose(lift[0], wall_x - settings.lift_margin)  # moved in from the +x wall...
+    assert np.isclose(lift[1], BIN.center[1] - 0.05)  # ...not along it (9 cm from the -y wall)
+    assert np.isclose(lift[2], RIM + settings.lift_height)
+    assert np.array_equal(poses.lift.rotation().matrix(), near.rotation().matrix())
+    narrow = dataclasses.replace(BIN, inner_size=[0.1, BIN.inner_size[1]])
+    lift = pick_poses(near, narrow, settings).lift.translation()
+    assert np.isclose(lift[0], narrow.center[0])  # narrower than twice the margin: the middle
+    with pytest.raises(ValueError, match="lift_margin"):
+        ApproachSettings(lift_margin=-0.01)
+
+
 def test_pressing_in_stops_short_of_the_floor():
     settings = ApproachSettings()
     low = top_down(0.34, 0.22, BIN.floor_height + TIPS_BELOW_TCP + 0.002)

@@ -6,7 +6,10 @@ where the compliant pads' lower edge squeezes a round wire out under the tips (m
 8 first picks came up empty; 1 of 8 with 4 mm more). Above the grasp: a pre-grasp back along
 the approach axis, high enough that the fingertips clear the bin's rim; a point a few
 centimetres above the grasp where the slow part of the descent starts; after the grasp, the
-lift pose straight above the pre-grasp. The parallel
+lift pose above the pre-grasp, moved in from the walls where the pre-grasp is near one: a
+part hanging from the gripper (or from the part it holds), or dropping off it at the top of
+the lift where the load is weighed and shaken, then comes down in the bin, not over its wall
+(in bin clearing, most lost parts left the bin during a lift). The parallel
 gripper is symmetric, so a grasp turned 180° about the approach axis is the same grasp: the
 twin whose closing direction is nearer the tool's current one needs the least wrist travel.
 """
@@ -35,6 +38,9 @@ class ApproachSettings:
     lift_height: float = 0.12
     """After the lift the tool centre is this far above the rim: a part hanging from the
     grasped one is then out of the bin too, where it can be counted."""
+    lift_margin: float = 0.06
+    """...and at least this far in from every wall (or over the bin's middle, where the bin
+    is narrower than twice this), m."""
     press_depth: float = 0.004
     """The grasp goes this much deeper along the approach than the candidate says..."""
     floor_clearance: float = 0.001
@@ -46,6 +52,8 @@ class ApproachSettings:
         for name in ("approach_height", "rim_clearance", "slow_distance", "lift_height"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"ApproachSettings.{name} must be positive")
+        if self.lift_margin < 0:
+            raise ValueError("ApproachSettings.lift_margin must be >= 0")
         if self.slow_distance > self.approach_height:
             raise ValueError("ApproachSettings.slow_distance cannot exceed approach_height")
 
@@ -81,7 +89,10 @@ def pick_poses(X_WT: RigidTransform, bin_config: BinConfig,
         clear_z = rim_height + settings.rim_clearance + tips_below_tcp
         back = max(back, (clear_z - p_grasp[2]) / -approach[2])
     p_pre = p_grasp - back * approach
-    p_lift = np.array([p_pre[0], p_pre[1], max(p_pre[2], rim_height + settings.lift_height)])
+    centre = np.asarray(bin_config.center, float)
+    room = np.maximum(np.asarray(bin_config.inner_size, float) / 2 - settings.lift_margin, 0.0)
+    p_lift = np.array([*np.clip(p_pre[:2], centre - room, centre + room),
+                       max(p_pre[2], rim_height + settings.lift_height)])
     return PickPoses(RigidTransform(R, p_pre),
                      RigidTransform(R, p_grasp - settings.slow_distance * approach),
                      RigidTransform(R, p_grasp), RigidTransform(R, p_lift))
