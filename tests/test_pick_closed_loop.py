@@ -36,11 +36,14 @@ class FakeScale(LeafSystem):
     a weighing that cannot be trusted); tares at once. Also plays the wrist sensor, whose
     support drops by ``rest_drop`` N once the planner has been putting back for 0.3 s."""
 
-    def __init__(self, weighings, rest_drop: float = 0.0) -> None:
+    def __init__(self, weighings, rest_drop: float = 0.0,
+                 push: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> None:
         super().__init__()
         self.weighings = list(weighings)
         self.answers: dict[int, PayloadEstimate] = {}
         self.rest_drop = rest_drop
+        self.push = push
+        self.stir_since = None
         self.request = self.DeclareAbstractInputPort("request",
                                                      AbstractValue.Make(PayloadRequest()))
         self.mode = self.DeclareAbstractInputPort("mode", AbstractValue.Make(Mode.SETTLE))
@@ -72,12 +75,18 @@ class FakeScale(LeafSystem):
         if putting_back and self.put_back_since is None:
             self.put_back_since = context.get_time()
         resting = putting_back and context.get_time() - self.put_back_since > 0.3
-        out.SetFromVector([0, 0, GRIPPER + 2 * PART_WEIGHT - (self.rest_drop if resting else 0),
+        stirring = self.mode.Eval(context) is Mode.STIR
+        if stirring and self.stir_since is None:
+            self.stir_since = context.get_time()
+        force, start, end = self.push
+        pushing = stirring and start < context.get_time() - self.stir_since < end
+        out.SetFromVector([force if pushing else 0.0, 0,
+                           GRIPPER + 2 * PART_WEIGHT - (self.rest_drop if resting else 0),
                            0, 0, 0])
 
 
 def run(candidates, weighings, motion=None, width=0.003, picks=1, rest_drop=0.0,
-        recovery=None, duration=60.0, contents=None):
+        recovery=None, duration=60.0, contents=None, push=(0.0, 0.0, 0.0), log=None):
     motion = motion or FakeMotion()
     settings = PickSettings(max_picks=picks, recovery=recovery or RecoverySettings())
     builder = DiagramBuilder()
@@ -91,20 +100,24 @@ def run(candidates, weighings, motion=None, width=0.003, picks=1, rest_drop=0.0,
     builder.Connect(measured.get_output_port(), planner.GetInputPort("arm.state_measured"))
     gripper = builder.AddSystem(ConstantVectorSource(np.array([width, 0.0])))
     builder.Connect(gripper.get_output_port(), planner.GetInputPort("gripper.state_measured"))
-    scale = builder.AddSystem(FakeScale(weighings, rest_drop))
+    scale = builder.AddSystem(FakeScale(weighings, rest_drop, push))
     builder.Connect(planner.GetOutputPort("payload.request"), scale.GetInputPort("request"))
     builder.Connect(planner.GetOutputPort("mode"), scale.GetInputPort("mode"))
     builder.Connect(scale.GetOutputPort("payload"), planner.GetInputPort("payload"))
     builder.Connect(scale.GetOutputPort("wrench"), planner.GetInputPort("wrist.force_torque"))
     simulator = Simulator(builder.Build())
     context = planner.GetMyContextFromRoot(simulator.get_context())
+    scale_context = scale.GetMyContextFromRoot(simulator.get_context())
     modes, times = [], {}
     while simulator.get_context().get_time() < duration:
         simulator.AdvanceTo(simulator.get_context().get_time() + 0.01)
+        scale.GetOutputPort("wrench").Eval(scale_context)  # (it notes when a mode begins)
         mode = planner.GetOutputPort("mode").Eval(context)
         if not modes or modes[-1] is not mode:
             modes.append(mode)
             times.setdefault(mode, simulator.get_context().get_time())
+            if log is not None:
+                log.append((mode, simulator.get_context().get_time()))
         if mode is Mode.DONE:
             break
     return planner.GetOutputPort("picks").Eval(context), modes, motion, times
@@ -302,3 +315,24 @@ def test_without_stirs_a_bin_nothing_can_be_picked_from_ends_the_run():
     records, _, _, _ = run([], [], motion, contents=bin_view(True),
                            recovery=RecoverySettings(max_stirs=0))
     assert len(records) == 1 and motion.stirs == 0
+
+
+def test_a_stir_that_meets_too_much_force_goes_back_the_way_it_came():
+    def stir_time(push: tuple[float, float, float]):
+        log = []
+        records, _, _, _ = run([], [], contents=bin_view(True), push=push, log=log,
+                               recovery=RecoverySettings(max_stirs=1))
+        start = next(t for mode, t in log if mode is Mode.STIR)
+        end = next(t for mode, t in log if t > start)
+        return records, end - start
+
+    records, free = stir_time((0.0, 0.0, 0.0))
+    assert "backed out" not in (records[0].reason or "")
+    records, pushed = stir_time((40.0, 1.0, 9.0))
+    assert "met 40 N and backed out" in records[0].reason
+    assert records[0].recoveries == [Recovery.STIR]
+    # The fake stir takes ~3.4 s; pushed 1 s in, in the bin, it goes back the way it came.
+    assert free > 3.0 and pushed == pytest.approx(2.05, abs=0.1)
+    # Felt on the way to the bin (a fast move shakes the reading), it is no reason to stop.
+    records, shaken = stir_time((40.0, 0.0, 0.2))
+    assert "backed out" not in (records[0].reason or "") and shaken == pytest.approx(free)

@@ -12,7 +12,7 @@ from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 from tangle_drake.failures import FailureKind
 from tangle_drake.pick.outcome import Outcome, summarize
 from tangle_drake.pick.planner import Mode, PickPlanner, PickSettings, rank_scored
-from tangle_drake.planning.motion import PickMotion, PlanningError
+from tangle_drake.planning.motion import PickMotion, PlanningError, StirMotion
 from tangle_drake.planning.trajectory import rest_to_rest
 from tangle_drake.tangle_cnn.selection import ScoredCandidate
 
@@ -78,7 +78,10 @@ class FakeMotion:
 
     def plan_stir(self, hold, poses, speed):
         self.stirs += 1
-        return rest_to_rest(hold, np.asarray(hold) + 0.05, 1.0, 1.5)
+        above, end = np.asarray(hold) + 0.05, np.asarray(hold) + 0.55
+        return StirMotion(rest_to_rest(hold, above, 1.0, 1.5),  # ~0.4 s
+                          rest_to_rest(above, end, 0.2, 1.5),  # ~2.6 s
+                          rest_to_rest(end, hold, 1.0, 1.5))
 
 
 class CountingCandidates(LeafSystem):

@@ -9,6 +9,7 @@ from tangle_drake.graspability.synthetic import HeightField
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.pick.bin_contents import BinContents, bin_contents
 from tangle_drake.pick.stir import StirSettings, looks_empty, stir_line, stir_poses
+from tangle_drake.planning.trajectory import chain
 from tangle_drake.scenario import BinConfig
 
 BIN = BinConfig(center=[0.34, 0.22], floor_height=0.93, inner_size=[0.20, 0.28],
@@ -91,10 +92,17 @@ def test_the_sweep_keeps_the_palm_off_the_side_walls_and_short_of_the_far_one():
     assert line is None  # the palm (40 x 90 mm) cannot go down into a 45 mm wide bin
 
 
-def test_the_fingers_never_come_down_on_a_part():
+def test_the_fingers_come_down_beside_a_part_or_above_it_never_on_it():
     wall_x = BIN.center[0] + BIN.inner_size[0] / 2
-    under = (wall_x - 0.04, 0.21, wall_x - 0.015, 0.23, 0.012)  # under the sweep's start
+    under = (wall_x - 0.04, 0.21, wall_x - 0.015, 0.23, 0.012)  # where the sweep would start
     line = stir_line(bin_contents(scene([under]), CAMERA, BIN), SETTINGS)
+    assert line.start[2] == pytest.approx(BIN.floor_height + SETTINGS.tip_height)
+    reach = np.hypot(DEFAULT_GRIPPER.finger_width / 2, DEFAULT_GRIPPER.finger_thickness)
+    assert abs(line.start[1] - 0.22) > 0.01 + reach  # beside it, on free floor...
+    assert abs(line.start[1] - 0.22) < 0.01 + reach + 0.01  # ...as near level as there is
+    low_y, high_y = BIN.center[1] - BIN.inner_size[1] / 2, BIN.center[1] + BIN.inner_size[1] / 2
+    along_wall = (wall_x - 0.04, low_y, wall_x - 0.015, high_y, 0.012)  # no free floor there
+    line = stir_line(bin_contents(scene([along_wall]), CAMERA, BIN), SETTINGS)
     assert line.start[2] == pytest.approx(BIN.floor_height + 0.012 + SETTINGS.above_parts,
                                           abs=0.0015)
 
@@ -144,13 +152,18 @@ def test_the_gantry_sweeps_along_the_floor_and_comes_home():
     scenario = resolve_scenario("floating_gripper.yaml")
     motion = GantryMotion(scenario.bin, station_limits(scenario))
     poses = _sweep_by_the_far_wall(scenario.bin)
-    trajectory = motion.plan_stir(motion.home, poses, SETTINGS.speed)
+    stir = motion.plan_stir(motion.home, poses, SETTINGS.speed)
+    trajectory = chain([stir.approach, stir.sweep, stir.home])
     times = np.linspace(0, trajectory.end_time(), 400)
     q = np.array([trajectory.value(t).ravel() for t in times])
     np.testing.assert_allclose(q[0], motion.home)
     np.testing.assert_allclose(q[-1], motion.home)
     tcp = DEFAULT_GRIPPER.tcp_offset
     deepest = q[:, 2].min() - tcp  # the tool centre at the bottom of the sweep
+    rim = scenario.bin.floor_height + scenario.bin.wall_height + DEFAULT_GRIPPER.reach - tcp
+    np.testing.assert_allclose(stir.sweep.value(0).ravel()[:3] - [0, 0, tcp], poses[0][:3, 3])
+    np.testing.assert_allclose(stir.home.value(0).ravel()[:3] - [0, 0, tcp], poses[3][:3, 3])
+    assert poses[0][2, 3] > rim and poses[3][2, 3] > rim  # only the sweep goes into the bin
     assert deepest == pytest.approx(poses[1][2, 3], abs=1e-6)
     low = q[np.abs(q[:, 2] - tcp - deepest) < 1e-4]
     assert low[:, 0].min() == pytest.approx(poses[2][0, 3], abs=1e-3)  # along the floor...
@@ -166,7 +179,8 @@ def test_the_arm_sweeps_clear_of_the_bin_within_its_limits():
     bin_config = resolve_scenario(None).bin
     motion = ArmMotion(bin_config)
     poses = _sweep_by_the_far_wall(bin_config)
-    trajectory = motion.plan_stir(HOME, poses, SETTINGS.speed)
+    stir = motion.plan_stir(HOME, poses, SETTINGS.speed)
+    trajectory = chain([stir.approach, stir.sweep, stir.home])
     times = np.linspace(0, trajectory.end_time(), 300)
     q = np.array([trajectory.value(t).ravel() for t in times])
     np.testing.assert_allclose(q[0], HOME, atol=1e-9)
@@ -210,7 +224,8 @@ def test_a_stir_in_the_simulation_moves_parts_and_keeps_them_in_the_bin():
     motion = GantryMotion(scenario.bin, station_limits(scenario))
     hold = station.GetOutputPort("gantry.position_measured").Eval(context).copy()
     rim = scenario.bin.floor_height + scenario.bin.wall_height
-    sweep = motion.plan_stir(hold, stir_poses(line, rim), SETTINGS.speed)
+    stir = motion.plan_stir(hold, stir_poses(line, rim), SETTINGS.speed)
+    sweep = chain([stir.approach, stir.sweep, stir.home])
     before = station.part_poses(context)[:, :3, 3]
     start, lowest = context.get_time(), np.inf
     while context.get_time() < start + sweep.end_time() + 0.5:

@@ -1,6 +1,7 @@
-"""The closed loop's modes of the pick planner: tare, weigh, shake, put back (:mod:`.recovery`
-decides; this carries it out). A mixin of :class:`~tangle_drake.pick.planner.PickPlanner`,
-which gives it its ports, settings, motion and ``_enter`` / ``_check``."""
+"""The closed loop's modes of the pick planner: tare, weigh, shake, put back, stir the bin
+(:mod:`.recovery` decides; this carries it out). A mixin of
+:class:`~tangle_drake.pick.planner.PickPlanner`, which gives it its ports, settings, motion and
+``_enter`` / ``_check`` / ``_finish``."""
 
 from __future__ import annotations
 
@@ -10,8 +11,9 @@ import numpy as np
 from pydrake.systems.framework import Context
 from pydrake.trajectories import PiecewisePolynomial
 
-from tangle_drake.pick.modes import Mode, PlannerState
-from tangle_drake.pick.outcome import Outcome
+from tangle_drake.failures import FailureKind
+from tangle_drake.pick.modes import Loop, Mode, PlannerState
+from tangle_drake.pick.outcome import Outcome, PickRecord
 from tangle_drake.pick.payload import PayloadEstimate, PayloadPhase, PayloadRequest
 from tangle_drake.pick.recovery import (
     Disposition,
@@ -21,7 +23,9 @@ from tangle_drake.pick.recovery import (
     after_weighing,
     judge,
 )
+from tangle_drake.pick.stir import looks_empty, stir_line, stir_poses
 from tangle_drake.planning.motion import PlanningError
+from tangle_drake.planning.trajectory import chain
 
 FALLBACK = {Mode.SHAKE: Mode.WEIGH, Mode.SHAKE_OFF: Mode.WEIGH_OPEN, Mode.PUT_BACK: Mode.OPEN,
              Mode.RAISE: Mode.RETREAT}
@@ -29,8 +33,13 @@ FALLBACK = {Mode.SHAKE: Mode.WEIGH, Mode.SHAKE_OFF: Mode.WEIGH_OPEN, Mode.PUT_BA
 releases where the tool is."""
 
 
+def with_reason(record: PickRecord, words: str) -> PickRecord:
+    """``record`` with ``words`` added to its reason."""
+    return replace(record, reason=words if not record.reason else f"{record.reason}; {words}")
+
+
 class ClosedLoop:
-    """TARE, WEIGH, WEIGH_OPEN and the recovery moves."""
+    """TARE, WEIGH, WEIGH_OPEN, the recovery moves and the stir."""
 
     def _request(self, s: PlannerState, phase: PayloadPhase) -> PlannerState:
         """Ask the estimator for ``phase`` (a new request, unless idle; the same state
@@ -125,3 +134,92 @@ class ClosedLoop:
         return self._enter(Mode.OPEN, replace(s, trajectory=None, hold=hold,
                                               loop=replace(s.loop, resting=0)),
                            context.get_time())
+
+    # --- stirring the bin -------------------------------------------------------------------
+
+    def _may_stir(self, loop: Loop) -> bool:
+        return loop.can_stir and loop.stirs < self._recovery.max_stirs
+
+    def _nothing_to_pick(self, context: Context, s: PlannerState, record: PickRecord,
+                         t: float) -> PlannerState:
+        """A look that found nothing to pick (``record``, failed): stir the bin where stirs
+        are left, else the run ends."""
+        if self._may_stir(s.loop):
+            return self._stir(context, s, t, record)
+        return self._finish(replace(s, mode=Mode.SETTLE), record, t)
+
+    def _stir(self, context: Context, s: PlannerState, t: float,
+              record: PickRecord) -> PlannerState:
+        """Sweep the closed fingers through what is left in the bin (:mod:`.stir`), then look
+        again. ``record`` asked for it: a look that found nothing to pick, or (``stir_due``)
+        the last of ``max_attempts`` grasps without a delivery; it is reported once the stir
+        is over. Where the bin looks empty or the sweep cannot be planned, the run ends as it
+        would have without stirring."""
+        settings = self._recovery.stir
+        contents = self._contents.Eval(context)
+        line = stir_line(contents, settings)
+        why = None
+        if line is None:
+            why = "the bin looks empty" if looks_empty(contents, settings) else \
+                "the bin is too small to stir"
+        else:
+            rim = contents.bin.floor_height + contents.bin.wall_height
+            try:
+                stir = self._motion.plan_stir(s.hold, stir_poses(line, rim), settings.speed)
+            except PlanningError as error:
+                why = f"the stir cannot be planned ({error})"
+        looked = not s.loop.stir_due  # else the grasps that came up empty asked for it
+        loop = replace(s.loop, stir_due=False)
+        if why is not None:
+            s = replace(s, mode=Mode.SETTLE, record=None, loop=loop)
+            if looked:
+                return self._finish(s, with_reason(record, why), t)
+            s = replace(s, picks=(*s.picks, record))
+            return self._finish(s, self._gave_up(len(s.picks) + 1, loop, why), t)
+        record = replace(record, recoveries=[*record.recoveries, Recovery.STIR])
+        begins = stir.approach.end_time()
+        return replace(s, mode=Mode.STIR, since=t, width=0.0, record=record, empty_grasps=(),
+                       trajectory=chain([stir.approach, stir.sweep, stir.home]),
+                       loop=replace(loop, stirs=loop.stirs + 1, attempts=0, backing_out=False,
+                                    sweep=(begins, begins + stir.sweep.end_time())))
+
+    def _stirring(self, context: Context, s: PlannerState, t: float) -> PlannerState:
+        """During the stir: once it is over, report the record that asked for it and look
+        again; if the wrist feels more than ``stir.force_limit`` across, the sweep has met
+        something it must not push: go back the way it came."""
+        played = t - s.since
+        if played >= s.trajectory.end_time():
+            hold = s.trajectory.value(s.trajectory.end_time()).ravel()
+            return replace(s, mode=Mode.SETTLE, since=t, hold=hold, trajectory=None,
+                           record=None, picks=(*s.picks, s.record))
+        # Only in the bin: a fast free move on the way there shakes the wrist's reading too.
+        in_bin = s.loop.sweep[0] <= played <= s.loop.sweep[1]
+        if s.loop.backing_out or not in_bin or not self._wrench.HasValue(context):
+            return s
+        force = float(np.hypot(*self._wrench.Eval(context)[:2]))
+        if force <= self._recovery.stir.force_limit:
+            return s
+        return replace(s, since=t, trajectory=_back(s.trajectory, played),
+                       record=with_reason(s.record, f"the stir met {force:.0f} N and backed out"),
+                       loop=replace(s.loop, backing_out=True))
+
+    @staticmethod
+    def _gave_up(index: int, loop: Loop, why: str | None = None) -> PickRecord:
+        """The record of giving up on the bin."""
+        reason = f"{loop.attempts} grasps in a row delivered nothing"
+        if loop.stirs:
+            reason += f", {loop.stirs} stir{'s' * (loop.stirs > 1)} since the last delivery"
+        return PickRecord(index=index, failure=FailureKind.GAVE_UP,
+                          reason=reason if why is None else f"{reason}; {why}")
+
+
+BACK_STEP = 0.02
+"""Sampling of a move played backwards, s."""
+
+
+def _back(trajectory: PiecewisePolynomial, played: float) -> PiecewisePolynomial:
+    """The first ``played`` seconds of ``trajectory`` played backwards, at the same pace: the
+    way it came, which was clear, back to where it began."""
+    times = np.linspace(0.0, played, max(2, int(np.ceil(played / BACK_STEP)) + 1))
+    values = np.column_stack([trajectory.value(played - time).ravel() for time in times])
+    return PiecewisePolynomial.FirstOrderHold(times, values)

@@ -132,7 +132,13 @@ class Loop:
     stirs: int = 0
     """Stirs of the bin since the last delivery."""
     stir_due: bool = False
-    """The next look stirs the bin instead of picking (too many grasps came up empty)."""
+    """The next look stirs the bin instead of picking (too many grasps delivered nothing;
+    the last one's record waits in ``PlannerState.record`` until the stir is over)."""
+    sweep: tuple[float, float] = (0.0, 0.0)
+    """When the stir in progress is in the bin (from its start, s): the force limit holds
+    then."""
+    backing_out: bool = False
+    """The stir met too much force and goes back the way it came."""
     can_stir: bool = False
     """The planner sees the bin's contents (its ``bin_contents`` input is connected) and
     may stir (``RecoverySettings.max_stirs``)."""

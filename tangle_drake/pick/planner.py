@@ -98,8 +98,8 @@ from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.crops import candidate_crops
 from tangle_drake.failures import FailureKind, pick_failure
 from tangle_drake.pick.choose import EmptyGrasp, choose, rank_scored
-from tangle_drake.pick.closed_loop import FALLBACK, ClosedLoop
-from tangle_drake.pick.modes import Loop, Mode, PickSettings, PlannerState
+from tangle_drake.pick.closed_loop import FALLBACK, ClosedLoop, with_reason
+from tangle_drake.pick.modes import Mode, PickSettings, PlannerState
 from tangle_drake.pick.outcome import (
     VIEW_CANDIDATES,
     Outcome,
@@ -108,9 +108,8 @@ from tangle_drake.pick.outcome import (
     classify_lift,
 )
 from tangle_drake.pick.payload import PayloadEstimate, PayloadPhase, PayloadRequest
-from tangle_drake.pick.recovery import Disposition, Recovery
-from tangle_drake.pick.stir import looks_empty, stir_line, stir_poses
-from tangle_drake.planning.motion import Motion, PlanningError
+from tangle_drake.pick.recovery import Disposition
+from tangle_drake.planning.motion import Motion
 from tangle_drake.tangle_cnn.selection import ScoredCandidate
 
 __all__ = ["Mode", "PickPlanner", "PickSettings", "rank_scored"]
@@ -118,8 +117,9 @@ __all__ = ["Mode", "PickPlanner", "PickSettings", "rank_scored"]
 _PLANNED = {Mode.APPROACH: "approach", Mode.DESCEND: "descend", Mode.LIFT: "lift",
             Mode.TRANSFER: "transfer", Mode.HOME: "home", Mode.RETREAT: "retreat"}
 """Moving modes that play a trajectory of the pick's ``PickMotion``."""
-_MOVING = (*_PLANNED, Mode.SHAKE, Mode.PUT_BACK, Mode.SHAKE_OFF, Mode.RAISE, Mode.STIR)
-"""Every mode that plays a trajectory (the others are planned when they begin)."""
+_MOVING = (*_PLANNED, Mode.SHAKE, Mode.PUT_BACK, Mode.SHAKE_OFF, Mode.RAISE)
+"""Every mode that plays a trajectory (the others are planned when they begin), but STIR,
+which the closed loop watches itself."""
 
 
 class PickPlanner(ClosedLoop, LeafSystem):
@@ -225,6 +225,8 @@ class PickPlanner(ClosedLoop, LeafSystem):
             return self._perceive(context, s)
         if s.mode is Mode.PUT_BACK and (stopped := self._put_back(context, s)) is not s:
             return stopped
+        if s.mode is Mode.STIR:
+            return self._stirring(context, s, t)
         if s.mode in _MOVING and elapsed >= s.trajectory.end_time():
             return self._enter(self._after_move(s.mode), s, t)
         if s.mode is Mode.CLOSE and elapsed >= settings.close_delay and s.width > 0:
@@ -256,7 +258,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
                 Mode.LIFT: Mode.WEIGH if closed else Mode.CHECK, Mode.TRANSFER: Mode.RELEASE,
                 Mode.HOME: Mode.SETTLE, Mode.RETREAT: Mode.SETTLE, Mode.SHAKE: Mode.WEIGH,
                 Mode.PUT_BACK: Mode.OPEN, Mode.SHAKE_OFF: Mode.WEIGH_OPEN,
-                Mode.RAISE: Mode.RETREAT, Mode.STIR: Mode.SETTLE}[mode]
+                Mode.RAISE: Mode.RETREAT}[mode]
 
     def _enter(self, mode: Mode, s: PlannerState, t: float) -> PlannerState:
         """Switch to ``mode`` at time ``t``, holding where the last trajectory ended."""
@@ -276,7 +278,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
             s = replace(s, trajectory=trajectory)
         if mode is Mode.OPEN or (mode is Mode.RELEASE and self._recovery is None):
             s = replace(s, width=self._settings.open_width)
-        if mode is Mode.SETTLE and s.record is not None:  # back home: the pick is over
+        if mode is Mode.SETTLE:  # back home: the pick is over
             record = replace(s.record, execution_s=t - s.started, started_at=s.started)
             s = self._finish(replace(s, plan=None, record=None), record, t)
         return s
@@ -291,10 +293,12 @@ class PickPlanner(ClosedLoop, LeafSystem):
                               plan=None, record=None)
             if s.record is None:
                 return stopped
-            record = replace(s.record, outcome=Outcome.FAILED, execution_s=t - s.started,
-                             started_at=s.started,
-                             failure=FailureKind.SAFETY_STOP,
-                             reason=f"safety stop during {s.mode.value}")
+            stirring = s.mode is Mode.STIR or s.loop.stir_due  # the grasp itself is over
+            record = with_reason(s.record, "a safety stop came before the stir's end") \
+                if stirring else replace(
+                    s.record, outcome=Outcome.FAILED, execution_s=t - s.started,
+                    started_at=s.started, failure=FailureKind.SAFETY_STOP,
+                    reason=f"safety stop during {s.mode.value}")
             return replace(stopped, picks=(*s.picks, record))
         if not fault and s.mode is Mode.STOPPED:
             return replace(s, mode=Mode.DONE if self._done(s) else Mode.SETTLE, since=t,
@@ -314,12 +318,11 @@ class PickPlanner(ClosedLoop, LeafSystem):
                            attempts=0 if delivered else loop.attempts + 1,
                            stirs=0 if delivered else loop.stirs)
             if loop.attempts >= self._recovery.max_attempts:
-                if self._may_stir(loop):  # the next look stirs the bin instead
-                    record = replace(record, recoveries=[*record.recoveries, Recovery.STIR])
-                    loop = replace(loop, stir_due=True)
-                else:
-                    s = replace(s, picks=(*s.picks, record))
-                    record = self._gave_up(len(s.picks) + 1, loop)
+                if self._may_stir(loop):  # the next look stirs; the record waits for it
+                    return replace(s, record=record, since=t, loop=replace(
+                        loop, stir_due=True, reweighs=0, shakes=0, shakes_off=0))
+                s = replace(s, picks=(*s.picks, record))
+                record = self._gave_up(len(s.picks) + 1, loop)
         picks = (*s.picks, record)
         s = replace(s, picks=picks, loop=replace(loop, reweighs=0, shakes=0, shakes_off=0))
         done = self._done(s) or picks[-1].outcome is Outcome.FAILED
@@ -346,8 +349,8 @@ class PickPlanner(ClosedLoop, LeafSystem):
 
     def _perceive(self, context: Context, s: PlannerState) -> PlannerState:
         t = context.get_time()
-        if s.loop.stir_due:
-            return self._stir(context, s, t, None)
+        if s.loop.stir_due:  # the grasp that asked for it waits in ``s.record``
+            return self._stir(context, s, t, s.record)
         record = PickRecord(index=len(s.picks) + 1)
         start = time.perf_counter()
         candidates = list(self._candidates.Eval(context))
@@ -382,57 +385,6 @@ class PickPlanner(ClosedLoop, LeafSystem):
         record.started_at = t
         s = replace(s, plan=plan, record=record, started=t, width=self._settings.open_width)
         return self._enter(Mode.APPROACH, s, t)
-
-    def _nothing_to_pick(self, context: Context, s: PlannerState, record: PickRecord,
-                         t: float) -> PlannerState:
-        """A look that found nothing to pick (``record``, failed): stir the bin where stirs
-        are left, else the run ends."""
-        if self._may_stir(s.loop):
-            return self._stir(context, s, t, record)
-        return self._finish(replace(s, mode=Mode.SETTLE), record, t)
-
-    def _may_stir(self, loop: Loop) -> bool:
-        return loop.can_stir and loop.stirs < self._recovery.max_stirs
-
-    def _stir(self, context: Context, s: PlannerState, t: float,
-              record: PickRecord | None) -> PlannerState:
-        """Sweep the closed fingers through what is left in the bin (:mod:`.stir`), then look
-        again. ``record`` is the look that found nothing to pick; ``None``: grasps that came
-        up empty asked for the stir. Where the bin looks empty or the sweep cannot be
-        planned, the run ends as it would have without stirring."""
-        settings = self._recovery.stir
-        contents = self._contents.Eval(context)
-        line = stir_line(contents, settings)
-        why = None
-        if line is None:
-            why = "the bin looks empty" if looks_empty(contents, settings) else \
-                "the bin is too small to stir"
-        else:
-            rim = contents.bin.floor_height + contents.bin.wall_height
-            try:
-                trajectory = self._motion.plan_stir(s.hold, stir_poses(line, rim),
-                                                    settings.speed)
-            except PlanningError as error:
-                why = f"the stir cannot be planned ({error})"
-        loop = replace(s.loop, stir_due=False)
-        if why is not None:
-            record = self._gave_up(len(s.picks) + 1, loop, why) if record is None else \
-                replace(record, reason=f"{record.reason}; {why}")
-            return self._finish(replace(s, mode=Mode.SETTLE, loop=loop), record, t)
-        picks = s.picks if record is None else \
-            (*s.picks, replace(record, recoveries=[*record.recoveries, Recovery.STIR]))
-        return replace(s, mode=Mode.STIR, since=t, trajectory=trajectory, width=0.0,
-                       picks=picks, empty_grasps=(),
-                       loop=replace(loop, stirs=loop.stirs + 1, attempts=0))
-
-    @staticmethod
-    def _gave_up(index: int, loop: Loop, why: str | None = None) -> PickRecord:
-        """The record of giving up on the bin."""
-        reason = f"{loop.attempts} grasps in a row delivered nothing"
-        if loop.stirs:
-            reason += f", {loop.stirs} stir{'s' * (loop.stirs > 1)} since the last delivery"
-        return PickRecord(index=index, failure=FailureKind.GAVE_UP,
-                          reason=reason if why is None else f"{reason}; {why}")
 
     @staticmethod
     def _empty(record: PickRecord) -> EmptyGrasp:

@@ -28,7 +28,7 @@ from tangle_drake.planning.grasp_poses import (
     symmetric_grasps,
 )
 from tangle_drake.planning.ik import ArmIk, IkSettings
-from tangle_drake.planning.motion import PickMotion, PlanningError, ShakeSettings
+from tangle_drake.planning.motion import PickMotion, PlanningError, ShakeSettings, StirMotion
 from tangle_drake.planning.planning_model import PlanningModel
 from tangle_drake.planning.trajectory import (
     chain,
@@ -184,8 +184,7 @@ class ArmMotion:
         s = self.settings
         return rest_to_rest(start, end, s.velocity_limit, s.acceleration_limit)
 
-    def plan_stir(self, hold: np.ndarray, poses: list[np.ndarray],
-                  speed: float) -> PiecewisePolynomial:
+    def plan_stir(self, hold: np.ndarray, poses: list[np.ndarray], speed: float) -> StirMotion:
         """The sweep or its 180° twin (the palm is symmetric), the one nearer the current
         wrist angle first: IK for each pose, straight Cartesian legs between them, checked
         clear of the bin and the robot, then home."""
@@ -203,18 +202,17 @@ class ArmMotion:
                 errors.append(error)
         raise next((e for e in errors if e.kind is FailureKind.COLLISION), errors[0])
 
-    def _stir(self, q_hold: np.ndarray, poses: list[RigidTransform],
-              speed: float) -> PiecewisePolynomial:
+    def _stir(self, q_hold: np.ndarray, poses: list[RigidTransform], speed: float) -> StirMotion:
         above = self._solve(poses[0], q_hold, "stir's start", free=True)
         path = [above]
         for X in poses[1:-1]:
             path.append(self._solve(X, path[-1], "stir", free=False))
         path.append(self._solve(poses[-1], path[-1], "stir's end", free=True))
-        legs = [self._legs(self._straight(a, b, "stir"), speed)
-                for a, b in itertools.pairwise(path)]
-        return chain([self._legs(self._free_path([q_hold, above], None, "move to the stir")),
-                      *legs, self._legs(self._free_path([path[-1], self.q_home], None,
-                                                        "way home from the stir"))])
+        sweep = chain([self._legs(self._straight(a, b, "stir"), speed)
+                       for a, b in itertools.pairwise(path)])
+        return StirMotion(
+            self._legs(self._free_path([q_hold, above], None, "move to the stir")), sweep,
+            self._legs(self._free_path([path[-1], self.q_home], None, "way home from the stir")))
 
     def _solve(self, X_WT: RigidTransform, seed: np.ndarray, name: str, free: bool,
                free_yaw: bool = False) -> np.ndarray:

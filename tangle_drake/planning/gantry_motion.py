@@ -21,7 +21,7 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses
-from tangle_drake.planning.motion import PickMotion, PlanningError, ShakeSettings
+from tangle_drake.planning.motion import PickMotion, PlanningError, ShakeSettings, StirMotion
 from tangle_drake.planning.trajectory import MIN_DURATION, chain, hold, rest_to_rest
 from tangle_drake.robot import PLANNING_SLOW_SPEED
 from tangle_drake.scenario import BinConfig
@@ -130,12 +130,13 @@ class GantryMotion:
         return _leg(np.asarray(start, float), np.asarray(end, float))
 
     def plan_stir(self, hold_command: np.ndarray, poses: list[np.ndarray],
-                  speed: float) -> PiecewisePolynomial:
+                  speed: float) -> StirMotion:
         start = np.asarray(hold_command, float)
         points = [self.command_for(RigidTransform(np.asarray(X, float)), start[3])
                   for X in poses]
-        sweep = [_leg(a, b, speed) for a, b in itertools.pairwise(points)]
-        return chain([_leg(start, points[0], free=True), *sweep, _leg(points[-1], self.home)])
+        return StirMotion(_leg(start, points[0], free=True),
+                          chain([_leg(a, b, speed) for a, b in itertools.pairwise(points)]),
+                          _leg(points[-1], self.home))
 
 
 def _leg(a: np.ndarray, b: np.ndarray, speed: float = math.inf,

@@ -72,6 +72,16 @@ class PickMotion:
     pressed a little deeper (:mod:`tangle_drake.planning.grasp_poses`)."""
 
 
+@dataclass(frozen=True)
+class StirMotion:
+    """A planned stir of the bin, each leg starting at t = 0: to above the sweep's start,
+    the sweep itself (down into the bin, along its floor, back up), and home."""
+
+    approach: PiecewisePolynomial
+    sweep: PiecewisePolynomial
+    home: PiecewisePolynomial
+
+
 class Motion(Protocol):
     """A manipulator the pick state machine can drive."""
 
@@ -101,8 +111,7 @@ class Motion(Protocol):
     def plan_line(self, start: np.ndarray, end: np.ndarray) -> PiecewisePolynomial:
         """A short move between two commands near each other (back up after a put-back)."""
 
-    def plan_stir(self, hold: np.ndarray, poses: list[np.ndarray],
-                  speed: float) -> PiecewisePolynomial:
+    def plan_stir(self, hold: np.ndarray, poses: list[np.ndarray], speed: float) -> StirMotion:
         """From ``hold`` to the first of the tool poses ``poses`` (4x4, a sweep through the
         bin: :func:`~tangle_drake.pick.stir.stir_poses`), straight from each to the next with
         the tool centre at ``speed`` m/s, then home; raises :class:`PlanningError`."""
