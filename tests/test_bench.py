@@ -488,3 +488,14 @@ def test_a_run_that_finished_no_trial_binds_nothing(tmp_path):
     again.add({"part": "u_hook", "trial": 0, "picks": []})
     with pytest.raises(TangleDrakeError, match="other settings"):
         ResultStore(tmp_path, {"methods": ["harmonic"], "seed": 0})
+
+
+def test_clearing_with_a_sensor_too_coarse_for_the_part_says_so_before_it_starts():
+    scenario = Path(__file__).parents[1] / "docs/clearing/scenarios/floating_noise_x5.yaml"
+    _, _, notices = plan(BenchOptions(clear=True, scenario=scenario, parts=["u_hook", "j_hook"],
+                                      methods=["graspability"], trials=1))
+    warnings = [n for n in notices if "weighs one part" in n]
+    assert len(warnings) == 1 and "32.8 g" in warnings[0]  # the U-hook's; the J-hook is heavy
+    _, _, notices = plan(BenchOptions(clear=True, open_loop=True, scenario=scenario,
+                                      parts=["u_hook"], methods=["graspability"], trials=1))
+    assert not any("weighs one part" in n for n in notices)  # the open loop weighs nothing

@@ -130,3 +130,22 @@ def test_settings_refuse_nonsense():
         PayloadSettings(part_mass=0.0)
     with pytest.raises(ValueError, match="max_fraction"):
         PayloadSettings(part_mass=0.03, max_fraction=0.7)
+
+
+def test_a_sensor_too_coarse_for_the_part_is_warned_about_before_any_work():
+    from dataclasses import replace
+
+    from tangle_drake.drivers.config import ForceTorqueSensor
+    from tangle_drake.pick.diagram import weighing_warning
+    from tangle_drake.scenario import PartCount
+    from tangle_drake.scenario_files import resolve_scenario
+
+    scenario = resolve_scenario("floating_gripper.yaml")
+    assert weighing_warning(scenario) is None  # the shipped sensor weighs a U-hook surely
+    coarse = replace(scenario, force_torque_sensors={"wrist": ForceTorqueSensor(
+        force_noise=0.5, force_drift=0.05)})
+    warning = weighing_warning(coarse)
+    assert warning.startswith("warning:") and "32.8 g" in warning and "±0.38 parts" in warning
+    heavy = replace(coarse, pile=replace(coarse.pile, parts=[PartCount("j_hook", 15)]))
+    assert weighing_warning(heavy) is None  # a heavier part is weighed surely enough
+    assert weighing_warning(replace(scenario, force_torque_sensors={})) is None

@@ -37,7 +37,11 @@ from tangle_drake.bench.trials import (
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.parts.library import part_digest
-from tangle_drake.pick.diagram import closed_loop_settings, default_graspability_params
+from tangle_drake.pick.diagram import (
+    closed_loop_settings,
+    default_graspability_params,
+    weighing_warning,
+)
 from tangle_drake.pick.selection import model_part_notice
 from tangle_drake.pile import check_pile
 from tangle_drake.progress import Progress
@@ -179,6 +183,8 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
                          PhysicsSpread() if options.perturb else None)
     if options.clear and not options.open_loop:
         closed_loop_settings(scenario)  # a tray and a wrist sensor, or a clear error now
+        notices += [warning for spec in parts if (warning := weighing_warning(
+            part_scenario(config, spec)))]
     notices += overlap_warnings(config, trials)
     return config, trials, notices
 

@@ -29,6 +29,7 @@ from tangle_drake.pick.diagram import (
     build_pick_diagram,
     closed_loop_settings,
     pick_settings,
+    weighing_warning,
 )
 from tangle_drake.pick.episode import Clock, PickEpisode, PickRun, RunEnd, run_picks
 from tangle_drake.pick.meshcat_view import CandidateMarkers, frame_the_work
@@ -122,6 +123,8 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     motion = motion_for(scenario)  # before any long work: the scenario must have a robot
     settings = pick_settings(scenario, max_picks=options.picks) if options.open_loop \
         else closed_loop_settings(scenario, max_picks=options.picks)
+    if not options.open_loop and (warning := weighing_warning(scenario)):
+        say(warning)
     # Meshcat's candidate markers and the pictures are drawn from each look's record.
     settings = replace(settings, record_view=bool(options.meshcat or options.record
                                                   or options.pictures))

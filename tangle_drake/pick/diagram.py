@@ -33,7 +33,12 @@ from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_spec
 from tangle_drake.pick.bin_contents import BinContentsSystem
 from tangle_drake.pick.load_path import LoadPathMonitor
 from tangle_drake.pick.outcome import LiftMonitor, TrayMonitor
-from tangle_drake.pick.payload import PayloadEstimator, PayloadSettings
+from tangle_drake.pick.payload import (
+    PayloadEstimator,
+    PayloadSettings,
+    best_count_std,
+    surest_count_std,
+)
 from tangle_drake.pick.planner import PickPlanner, PickSettings
 from tangle_drake.pick.recovery import RecoverySettings
 from tangle_drake.pick.selection import RuleSelector, TangleChoice
@@ -108,6 +113,39 @@ def closed_loop_settings(scenario: Scenario, **overrides) -> PickSettings:
                                "scenario (as pick_demo.yaml has); without, pick open loop "
                                "(--open-loop)")
     return pick_settings(scenario, **{"recovery": RecoverySettings(), **overrides})
+
+
+TARE_TO_WEIGH = 4.0
+"""About how long a pick takes from the tare at the pre-grasp to the weighing at the top of
+the lift, s (descent, close, lift and the waits)."""
+
+
+def payload_settings(scenario: Scenario) -> PayloadSettings:
+    """How the closed loop's estimator weighs the scenario's pile with its wrist sensor."""
+    sensor = scenario.force_torque_sensors[WRIST]
+    return PayloadSettings(part_mass=part_mass(scenario.pile), period=sensor.period,
+                           sensor_noise=max(sensor.force_noise, sensor.force_resolution))
+
+
+def weighing_warning(scenario: Scenario) -> str | None:
+    """A warning, before any long work, when the scenario's wrist sensor cannot weigh its
+    parts surely enough for the closed loop (``None`` when it can, or has no sensor). The
+    estimator's own confidence counts the noise it sees, not the bias's drift since the
+    tare, which this does."""
+    if WRIST not in scenario.force_torque_sensors:
+        return None
+    sensor = scenario.force_torque_sensors[WRIST]
+    settings = payload_settings(scenario)
+    std = best_count_std(settings, sensor.force_drift, TARE_TO_WEIGH)
+    if std <= surest_count_std(settings):
+        return None
+    return (f"warning: the wrist sensor ({settings.sensor_noise:g} N noise, "
+            f"{sensor.force_drift:g} N/√s drift) weighs one part of {settings.part_mass * 1e3:.1f}"
+            f" g to ±{std:.2f} parts at best (its noise over {settings.max_window:g} s, its "
+            f"drift over the ~{TARE_TO_WEIGH:g} s from the tare to the weighing), more than the "
+            f"±{surest_count_std(settings):.2f} at which one part is told from two at "
+            f"{settings.min_confidence:.0%}: expect lifts put back, bins given up on, or two "
+            "parts taken for one; use a finer sensor, or pick open loop")
 
 
 def part_mass(pile: PileConfig) -> float:
@@ -250,11 +288,8 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
 def _add_payload(builder: DiagramBuilder, scenario: Scenario, station: Diagram,
                  planner: PickPlanner, motion: Motion) -> PayloadEstimator:
     """The estimator between the wrist sensor, the carrier's state and the planner."""
-    sensor = scenario.force_torque_sensors[WRIST]
-    estimator = builder.AddNamedSystem("payload", PayloadEstimator(
-        PayloadSettings(part_mass=part_mass(scenario.pile), sensor_noise=max(
-            sensor.force_noise, sensor.force_resolution), period=sensor.period),
-        motion.measured_size))
+    estimator = builder.AddNamedSystem("payload", PayloadEstimator(payload_settings(scenario),
+                                                                   motion.measured_size))
     wrench = station.GetOutputPort(f"{WRIST}.force_torque")
     builder.Connect(wrench, estimator.GetInputPort("force_torque"))
     builder.Connect(wrench, planner.GetInputPort("wrist.force_torque"))

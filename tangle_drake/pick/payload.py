@@ -157,6 +157,24 @@ def estimate_from(samples: np.ndarray, tare: float, settings: PayloadSettings,
                            len(samples), float(np.mean(samples)), weight)
 
 
+def best_count_std(settings: PayloadSettings, drift: float, interval: float) -> float:
+    """The standard error of a count at best, in parts: the sensor's noise averaged over
+    ``max_window`` for the tare and for the weighing, and its bias's random walk (``drift``,
+    N per root second) over the ``interval`` between them, s (taring does not remove that)."""
+    samples = max(1, round(settings.max_window / settings.period))
+    weight = settings.part_mass * G
+    noise = settings.sensor_noise * math.sqrt(2 / samples)
+    return math.hypot(noise, drift * math.sqrt(interval)) / weight
+
+
+def surest_count_std(settings: PayloadSettings) -> float:
+    """The largest standard error at which a count on a whole number is still trusted
+    (its confidence reaches ``min_confidence``), parts."""
+    from statistics import NormalDist
+
+    return 0.5 / NormalDist().inv_cdf(0.5 + settings.min_confidence / 2)
+
+
 def tare_is_precise(samples: int, settings: PayloadSettings) -> bool:
     """Whether a tare of ``samples`` samples leaves room in ``target_std`` for the weighing:
     its share of a count's standard error is below ``target_std`` over the root of two."""
