@@ -12,19 +12,28 @@ _FRICTION = (0.5, 0.4)
 
 
 def bin_boxes(config: BinConfig) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Name -> (centre in world, full size) of each box of the bin, stand included."""
+    """Name -> (centre in world, full size) of each box of the bin, stand included.
+
+    The walls reach down through the floor and the stand is as wide as the floor, so the box
+    has no seam: with walls standing on a thin floor, a wire pried into the floor beside a
+    wall (point contact lets it sink a few millimetres) was pushed out under the wall by the
+    floor's side face, and the part was lost through a solid box.
+    """
     cx, cy = config.center
     sx, sy = config.inner_size
     t, h, f = config.wall_thickness, config.wall_height, config.floor_thickness
     z0 = config.floor_height
-    wall_z = z0 + h / 2
+    wall_z, wall_h = z0 + (h - f) / 2, h + f
     return {
         "floor": (np.array([cx, cy, z0 - f / 2]), np.array([sx + 2 * t, sy + 2 * t, f])),
-        "wall_front": (np.array([cx + (sx + t) / 2, cy, wall_z]), np.array([t, sy + 2 * t, h])),
-        "wall_back": (np.array([cx - (sx + t) / 2, cy, wall_z]), np.array([t, sy + 2 * t, h])),
-        "wall_left": (np.array([cx, cy + (sy + t) / 2, wall_z]), np.array([sx, t, h])),
-        "wall_right": (np.array([cx, cy - (sy + t) / 2, wall_z]), np.array([sx, t, h])),
-        "stand": (np.array([cx, cy, (z0 - f) / 2]), np.array([sx, sy, z0 - f])),
+        "wall_front": (np.array([cx + (sx + t) / 2, cy, wall_z]),
+                       np.array([t, sy + 2 * t, wall_h])),
+        "wall_back": (np.array([cx - (sx + t) / 2, cy, wall_z]),
+                      np.array([t, sy + 2 * t, wall_h])),
+        "wall_left": (np.array([cx, cy + (sy + t) / 2, wall_z]), np.array([sx, t, wall_h])),
+        "wall_right": (np.array([cx, cy - (sy + t) / 2, wall_z]), np.array([sx, t, wall_h])),
+        "stand": (np.array([cx, cy, (z0 - f) / 2]),
+                  np.array([sx + 2 * t, sy + 2 * t, z0 - f])),
     }
 
 
