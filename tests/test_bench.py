@@ -395,7 +395,7 @@ def test_clearing_a_quick_bin_counts_what_landed_in_the_tray(tmp_path, capsys):
                for g in run["grasps"])  # closed loop: every held lift was weighed
     for g in run["grasps"]:  # the load path's truth: a part that landed was held up
         if g["landed"] and g["disposition"] == "DELIVERED":
-            assert g["held"] >= 1 and g["resting"] is not None
+            assert g["held"] >= 1 and g["resting"] is not None and g["held_decided"] >= 1
     summary = json.loads((out / "clear_summary.json").read_text())
     figures = summary["overall"]["graspability"]
     assert figures["delivered"] == run["delivered"] and figures["bins"] == 1
@@ -436,6 +436,29 @@ def test_the_escape_watch_names_the_mode_a_lost_part_left_the_bin_in():
     poses[2, :3, 3] = [0.34, 0.75, 0.30]  # bounced out of the tray while the next grasp began
     watch(Mode.APPROACH)
     assert watch.escapes[1] == {"grasp": 1, "mode": "home", "part": 2, "source": "tray"}
+
+
+def test_several_read_as_one_is_judged_at_the_weighing_that_decided_the_delivery():
+    def grasp(landed=1, held=1, decided=1, recoveries=(), disposition="DELIVERED"):
+        return {"outcome": "ONE", "failure": None, "lifted": held, "held": held,
+                "resting": 0, "held_decided": decided, "recoveries": list(recoveries),
+                "disposition": disposition, "landed": landed}
+
+    def read_as_one(*grasps):
+        run = {"method": "m", "grasps": list(grasps), "delivered": 1, "left_in_bin": 0,
+               "lost": 0, "sim_s": 10.0, "compute_s": 1.0}
+        return figures([run])["several_read_as_one"]
+
+    assert read_as_one(grasp()) == 0
+    assert read_as_one(grasp(held=2, decided=1, recoveries=["SHAKE"])) == 0  # the shake worked
+    assert read_as_one(grasp(held=2, decided=2, recoveries=["SHAKE"])) == 1  # it did not
+    assert read_as_one(grasp(held=1, decided=2)) == 1
+    assert read_as_one(grasp(landed=2)) == 1  # two landed, whatever was weighed
+    assert read_as_one(grasp(held=2, decided=2, disposition="PUT_BACK", landed=0)) == 0
+    # Rows made before the deciding weighing was recorded: the first weighing decided unless
+    # a shake or re-weighing followed.
+    assert read_as_one(grasp(held=2, decided=None)) == 1
+    assert read_as_one(grasp(held=2, decided=None, recoveries=["SHAKE", "REWEIGH"])) == 0
 
 
 def test_lost_parts_are_reported_by_the_mode_they_left_the_bin_in():

@@ -3,7 +3,7 @@
 Per method and part, and per method over all parts: parts delivered to the tray; deliveries
 (grasps after which parts landed in the tray, counted by the simulation) with exactly one
 part and with several; several read as one (delivered on the estimator's "one part" while
-several came up, were held up through contacts at the weighing, or landed); weighings made
+several were held up through contacts at the weighing that decided it, or landed); weighings made
 while a held part still rested on the pile (the wrist then reads light); grasps (not looks
 that found nothing to pick) per delivered part; shakes, put-backs and stirs of the bin; parts
 left in the bin and lost (in neither bin nor tray, by where they fell from and the planner's
@@ -24,8 +24,8 @@ import numpy as np
 BOOTSTRAP_SAMPLES = 2000
 BOOTSTRAP_SEED = 0
 _FIELDS = ("part", "trial", "method", "index", "outcome", "failure", "lifted", "held",
-           "resting", "weighed",
-           "verdict", "recoveries", "disposition", "landed", "execution_s", "compute_s")
+           "resting", "held_decided", "weighed", "verdict", "recoveries", "disposition",
+           "landed", "execution_s", "compute_s")
 
 
 def _counts(runs: Sequence[dict]) -> dict:
@@ -39,9 +39,7 @@ def _counts(runs: Sequence[dict]) -> dict:
         "bins": len(runs), "parts": parts, "delivered": delivered,
         "deliveries": len(landed), "exactly_one": sum(n == 1 for n in landed),
         "several": sum(n >= 2 for n in landed),
-        "several_read_as_one": sum(g["disposition"] == "DELIVERED" and (
-            g["landed"] >= 2 or max(g["lifted"] or 0, g.get("held") or 0) >= 2)
-            for g in grasps),
+        "several_read_as_one": sum(_several_read_as_one(g) for g in grasps),
         "weighed_resting": sum((g.get("resting") or 0) > 0 for g in grasps),
         "grasps": sum(g["outcome"] != "FAILED" for g in grasps),
         "shakes": sum(r in ("SHAKE", "SHAKE_OFF") for g in grasps for r in g["recoveries"]),
@@ -53,6 +51,21 @@ def _counts(runs: Sequence[dict]) -> dict:
         "lost": sum(run["lost"] for run in runs), "hours": hours,
         "lost_by_mode": _lost_by_mode(runs),
     }
+
+
+def _several_read_as_one(grasp: dict) -> bool:
+    """Delivered on the estimator's "one" while several were held up at the weighing that
+    decided it, or several landed. A row made before ``held_decided`` was recorded knows the
+    count at the first weighing only, which decided where no shake or re-weighing followed
+    (after a shake that worked, several at the first weighing and one delivered is right)."""
+    if grasp["disposition"] != "DELIVERED":
+        return False
+    if grasp["landed"] >= 2:
+        return True
+    decided = grasp.get("held_decided")
+    if decided is None and not {"SHAKE", "REWEIGH"} & set(grasp["recoveries"]):
+        decided = max(grasp["lifted"] or 0, grasp.get("held") or 0)
+    return (decided or 0) >= 2
 
 
 def _lost_by_mode(runs: Sequence[dict]) -> dict[str, int]:
@@ -154,8 +167,8 @@ def write_clear_report(directory: Path, trials: Sequence[dict], summary: dict,
              "Deliveries and their part counts are the simulation's (what landed in the tray);"
              " parts per hour count simulated time plus the computation's wall time. Several "
              "read as one: delivered on the estimator's \"one\" while several were held up "
-             "(through contacts) at the weighing, or landed. Weighed while resting: the first "
-             "weighing came while a held part still touched the pile.", "",
+             "(through contacts) at the weighing that decided it, or landed. Weighed while "
+             "resting: the first weighing came while a held part still touched the pile.", "",
              "## All parts", "", *_HEADER,
              *[_row(m, summary["overall"][m]) for m in methods]]
     lines += _lost_lines(summary["overall"], methods)

@@ -181,6 +181,7 @@ def grasp_row(record: PickRecord, landed: int) -> dict:
     return {"index": record.index, "outcome": record.outcome.name,
             "failure": None if record.failure is None else record.failure.value,
             "lifted": record.lifted, "held": record.held, "resting": record.resting,
+            "held_decided": record.held_decided,
             "weighed": None if record.estimate is None or not record.estimate.ready
             else round(record.estimate.parts, 3),
             "verdict": None if record.verdict is None else record.verdict.name,

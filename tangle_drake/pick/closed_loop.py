@@ -87,7 +87,9 @@ class ClosedLoop:
             record = replace(record, estimate=estimate, verdict=verdict)
         step = after_weighing(verdict, loop.reweighs, loop.shakes, recovery)
         if isinstance(step, Disposition):
-            record = replace(record, disposition=step)
+            held = self._held_now(context)
+            record = replace(record, disposition=step,
+                             held_decided=None if held is None else held[0])
             s = replace(s, record=record, loop=loop)
             if step is Disposition.DELIVERED:
                 return self._enter(Mode.TRANSFER, s, t)

@@ -99,6 +99,9 @@ class PickRecord:
     (:class:`~tangle_drake.pick.load_path.LoadPathMonitor`; ``None`` without one)."""
     resting: int | None = None
     """Of the ``held`` parts, how many still touched the pile or the bin then."""
+    held_decided: int | None = None
+    """Parts held up through contacts at the weighing that decided where the load went (the
+    last one: after a shake it can differ from ``held``); ``None`` without a monitor."""
     perception_s: float = 0.0
     """Wall time of rendering the depth image and the graspability index, s."""
     cnn_s: float = 0.0

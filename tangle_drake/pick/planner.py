@@ -397,9 +397,15 @@ class PickPlanner(ClosedLoop, LeafSystem):
         lifted = round(self._lifted.Eval(context)[0]) if self._lifted.HasValue(
             context) else None
         outcome = classify_lift(width, lifted, self._settings.empty_width)
-        held = resting = None
-        if self._held.HasValue(context):
-            held, resting = (round(n) for n in self._held.Eval(context))
+        held, resting = self._held_now(context) or (None, None)
         return replace(record, outcome=outcome, width=width, lifted=lifted, held=held,
                        resting=resting)
+
+    def _held_now(self, context: Context) -> tuple[int, int] | None:
+        """The simulation's parts held up by the gripper, and of those resting on the pile;
+        ``None`` where no monitor is connected (hardware)."""
+        if not self._held.HasValue(context):
+            return None
+        held, resting = (round(n) for n in self._held.Eval(context))
+        return held, resting
 
