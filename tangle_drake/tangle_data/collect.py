@@ -2,13 +2,16 @@
 
 Task ``i`` is one pile made from (seed, i) (:mod:`.seeds`); tasks are handed out lowest
 unfinished index first, and no more are started once the samples on disk plus those the
-running tasks will likely add reach the target. So a run collects the first tasks that
-reach ``samples`` (with N workers, up to N-1 tasks more, which a longer run would make
-next anyway), and an interrupted run, run again, redoes exactly the tasks that were lost.
+running tasks will likely add reach the target. Finished tasks are stored in the order they
+were handed out, and the first of them that together hold ``samples`` end the run (a later
+task that finished early is dropped). So a run collects the first tasks that reach
+``samples``, the same with any number of workers, and an interrupted run, run again, redoes
+exactly the tasks that were lost.
 """
 
 from __future__ import annotations
 
+import collections
 import itertools
 import sys
 from concurrent.futures import FIRST_COMPLETED, Future, wait
@@ -132,27 +135,37 @@ def _run(store: DatasetStore, factory: type, args: tuple, per_task: int, seed: i
          samples: int, workers: int | None, ray_address: str | None, name: str,
          show_progress: bool | None) -> CollectionResult:
     """Run ``factory(*args)``'s tasks until the store holds ``samples`` (a task makes about
-    ``per_task`` before any has finished)."""
+    ``per_task`` before any has finished).
+
+    Tasks are stored in the order they were handed out, and the first run of them that holds
+    ``samples`` ends the collection: a later task that finished early is dropped, so the
+    dataset is the one a single worker makes, whatever the number of workers.
+    """
     if store.totals["samples"] >= samples:
         return CollectionResult(store.directory, store.counts(), 0, False, 0.0)
     backend = start_workers(factory, args, workers, ray_address)
     progress = CollectProgress(name, samples, store.counts(), backend.capacity,
                                show_progress)
     pending: dict[Future, int] = {}
+    handed_out: collections.deque[int] = collections.deque()  # not yet stored, in order
+    early: dict[int, TaskResult] = {}  # finished, waiting for an earlier task
     unfinished = (task for task in itertools.count() if task not in store.finished)
     new_tasks = 0
     interrupted = False
     try:
-        while True:
+        while store.totals["samples"] < samples:
             while len(pending) < backend.capacity and \
-                    _expected(store, len(pending), per_task) < samples:
+                    _expected(store, len(handed_out), per_task) < samples:
                 task = next(unfinished)
                 pending[backend.submit(task)] = task
-            if not pending:
-                break
+                handed_out.append(task)
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for future in sorted(done, key=pending.__getitem__):
-                result = _result(future, pending.pop(future), seed)
+            for future in done:
+                task = pending.pop(future)
+                early[task] = _result(future, task, seed)
+            while handed_out and handed_out[0] in early and \
+                    store.totals["samples"] < samples:
+                result = early.pop(handed_out.popleft())
                 store.add(result)
                 progress.task_done(result.stats)
                 new_tasks += 1
