@@ -95,7 +95,7 @@ def test_the_fast_pick_ends_an_empty_close_there_with_the_full_picks_outcome():
     scenario = pick_data_scenario((diagrams_dir() / PICK_SCENARIO).read_text(), settings)
     methods = [Method("graspability", "graspability")]
     full, fast = (PickRig(scenario, methods, "e_shape", True, fast=f) for f in (False, True))
-    settled = full.settle(2)  # rank 0 closes on nothing, rank 1 brings up one E
+    settled = full.settle(9)  # rank 0 closes on nothing, rank 1 brings up one E
     for rank, outcome in ((0, Outcome.NONE), (1, Outcome.ONE)):
         run = MethodRun("graspability", 0, only=rank)
         slow, quick = full.pick(settled.state, run), fast.pick(settled.state, run)
