@@ -8,9 +8,11 @@ import signal
 import subprocess
 import sys
 import time
+from concurrent.futures import Future
 from dataclasses import replace
 from functools import partial
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -18,6 +20,7 @@ from cli_run import run_command
 
 from tangle_drake.dataset import SAMPLE_FIELDS, finished_tasks, load_samples, read_manifest
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.tangle_data import collect as collect_module
 from tangle_drake.tangle_data.collect import collect, default_scenario_text
 from tangle_drake.tangle_data.settings import CollectSettings
 from tangle_drake.tangle_data.simulator import TangleDataSimulator
@@ -260,3 +263,49 @@ def test_shards_are_readable_by_others_as_the_umask_allows(uninterrupted):
     os.umask(umask)
     for path in uninterrupted.glob("shard_*.npz"):
         assert path.stat().st_mode & 0o777 == 0o666 & ~umask, path
+
+
+class _OutOfOrderWorkers:
+    """A backend of ``capacity`` workers whose tasks finish latest-first; task 1 of each
+    collection makes one sample, every other task two."""
+
+    def __init__(self, capacity: int) -> None:
+        self.capacity = capacity
+
+    def submit(self, task: int) -> Future:
+        future: Future = Future()
+        samples = 1 if task == 1 else 2
+        future.task = task  # for the order below
+        future.set_result(SimpleNamespace(task=task, stats={"samples": samples, "tangled": 0}))
+        return future
+
+    def close(self) -> None:
+        pass
+
+
+class _Store:
+    def __init__(self, directory: Path) -> None:
+        self.directory, self.finished, self.tasks = directory, set(), []
+        self.totals = {"samples": 0, "tasks": 0}
+
+    def add(self, result) -> None:
+        self.tasks.append(result.task)
+        self.totals["samples"] += result.stats["samples"]
+        self.totals["tasks"] += 1
+
+    def counts(self) -> dict:
+        return {"samples": self.totals["samples"], "tangled": 0}
+
+
+@pytest.mark.parametrize("workers", [1, 2, 4])
+def test_the_tasks_kept_do_not_depend_on_the_number_of_workers(workers, tmp_path,
+                                                                monkeypatch):
+    def latest_first(futures, return_when):
+        return {max(futures, key=lambda future: future.task)}, set()
+
+    monkeypatch.setattr(collect_module, "start_workers",
+                        lambda *args: _OutOfOrderWorkers(workers))
+    monkeypatch.setattr(collect_module, "wait", latest_first)
+    store = _Store(tmp_path)
+    collect_module._run(store, object, (), 2, 0, 5, workers, None, "part", False)
+    assert store.tasks == [0, 1, 2]  # 2 + 1 + 2 samples: what one worker keeps
