@@ -137,13 +137,14 @@ def weighing_warning(scenario: Scenario) -> str | None:
     sensor = scenario.force_torque_sensors[WRIST]
     settings = payload_settings(scenario)
     std = best_count_std(settings, sensor.force_drift, TARE_TO_WEIGH)
-    if std <= surest_count_std(settings):
+    surest = surest_count_std(settings)
+    if std <= surest:
         return None
     return (f"warning: the wrist sensor ({settings.sensor_noise:g} N noise, "
             f"{sensor.force_drift:g} N/√s drift) weighs one part of {settings.part_mass * 1e3:.1f}"
             f" g to ±{std:.2f} parts at best (its noise over {settings.max_window:g} s, its "
             f"drift over the ~{TARE_TO_WEIGH:g} s from the tare to the weighing), more than the "
-            f"±{surest_count_std(settings):.2f} at which one part is told from two at "
+            f"±{surest:.2f} at which one part is told from two at "
             f"{settings.min_confidence:.0%}: expect lifts put back, bins given up on, or two "
             "parts taken for one; use a finer sensor, or pick open loop")
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass, field, replace
+from statistics import NormalDist
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -170,8 +171,6 @@ def best_count_std(settings: PayloadSettings, drift: float, interval: float) -> 
 def surest_count_std(settings: PayloadSettings) -> float:
     """The largest standard error at which a count on a whole number is still trusted
     (its confidence reaches ``min_confidence``), parts."""
-    from statistics import NormalDist
-
     return 0.5 / NormalDist().inv_cdf(0.5 + settings.min_confidence / 2)
 
 
