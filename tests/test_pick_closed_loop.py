@@ -336,3 +336,18 @@ def test_a_stir_that_meets_too_much_force_goes_back_the_way_it_came():
     # Felt on the way to the bin (a fast move shakes the reading), it is no reason to stop.
     records, shaken = stir_time((40.0, 0.0, 0.2))
     assert "backed out" not in (records[0].reason or "") and shaken == pytest.approx(free)
+
+
+def test_the_lift_takes_a_hanging_chain_clear_of_the_pile_the_camera_saw():
+    view = bin_view(True)
+    view.heights[10:14, 20:24] = 0.05  # a part standing up, 5 cm tall
+    view.heights[30, 30] = 0.09  # and one stray pixel, which does not count
+    recovery = RecoverySettings(hanging_length=0.2)
+    _, _, seen, _ = run([candidate(0, 0.9)], [1], contents=view, recovery=recovery)
+    assert seen.tips_above == [pytest.approx(BinConfig().floor_height + 0.05 + 0.2)]
+    _, _, blind, _ = run([candidate(0, 0.9)], [1], recovery=recovery)  # no bin view
+    assert blind.tips_above == [None]
+    _, _, plain, _ = run([candidate(0, 0.9)], [1], contents=view)  # no hanging length
+    assert plain.tips_above == [None]
+    with pytest.raises(ValueError):
+        RecoverySettings(hanging_length=-0.1)

@@ -48,18 +48,21 @@ class FakeMotion:
         self.unreachable = unreachable
         self.colliding = colliding
         self.planned: list[int] = []
+        self.tips_above: list[float | None] = []
         self.shakes = self.lowered = self.stirs = 0
 
     def hold_command(self, measured: np.ndarray) -> np.ndarray:
         return np.asarray(measured[:2]).copy()
 
-    def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray) -> PickMotion:
+    def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray,
+                  tips_above: float | None = None) -> PickMotion:
         index = int(X_WT[0, 3])
         if index in self.unreachable:
             raise PlanningError(FailureKind.UNREACHABLE, f"candidate {index} is out of reach")
         if index in self.colliding:
             raise PlanningError(FailureKind.COLLISION, f"candidate {index} hits the bin")
         self.planned.append(index)
+        self.tips_above.append(tips_above)
         home, there = np.zeros(2), np.array([0.3, -0.2])
         go, back = (rest_to_rest(home, there, 1.0, 1.5),
                     rest_to_rest(there, home, 1.0, 1.5))

@@ -9,6 +9,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
+from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.planning.arm_motion import ArmMotion
 from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses, symmetric_grasps
 from tangle_drake.planning.motion import PlanningError
@@ -103,6 +104,47 @@ def test_the_lift_ends_in_from_the_walls():
     assert np.isclose(lift[0], narrow.center[0])  # narrower than twice the margin: the middle
     with pytest.raises(ValueError, match="lift_margin"):
         ApproachSettings(lift_margin=-0.01)
+
+
+def test_the_lift_rises_until_a_hanging_chain_clears_the_pile():
+    settings = ApproachSettings()
+    plain = pick_poses(IN_BIN, BIN, settings).lift.translation()
+    high = pick_poses(IN_BIN, BIN, settings, tips_above=RIM + 0.3).lift.translation()
+    assert np.isclose(high[2] - TIPS_BELOW_TCP, RIM + 0.3)
+    assert np.allclose(high[:2], plain[:2])
+    low = pick_poses(IN_BIN, BIN, settings, tips_above=RIM).lift.translation()
+    assert np.allclose(low, plain)  # never lower than the settings' lift
+
+
+def test_the_gantry_lifts_a_chain_clear_within_its_travel():
+    from tangle_drake.drivers.limits import station_limits
+    from tangle_drake.planning.gantry_motion import GantryMotion
+    from tangle_drake.scenario_files import resolve_scenario
+
+    scenario = resolve_scenario("floating_gripper.yaml")
+    motion = GantryMotion(scenario.bin, station_limits(scenario))
+    X = top_down(*scenario.bin.center, scenario.bin.floor_height + 0.02).GetAsMatrix4()
+    rim = scenario.bin.floor_height + scenario.bin.wall_height
+
+    def lift_top(tips_above):
+        lift = motion.plan_pick(X, np.zeros(8), tips_above).lift
+        return lift.value(lift.end_time()).ravel()
+
+    plain, high = lift_top(None), lift_top(rim + 0.25)
+    assert np.isclose(high[2] - DEFAULT_GRIPPER.tcp_offset - TIPS_BELOW_TCP, rim + 0.25)
+    assert high[2] > plain[2] and np.allclose(high[[0, 1, 3]], plain[[0, 1, 3]])
+    assert np.isclose(lift_top(rim + 5.0)[2], motion.upper[2])  # as high as it goes
+
+
+def test_the_arm_lifts_a_chain_clear_where_it_reaches_and_as_before_where_not(motion):
+    def lift_tcp(tips_above):
+        lift = motion.plan_pick(IN_BIN.GetAsMatrix4(), MEASURED_HOME, tips_above).lift
+        return motion.model.tcp_pose(motion.model.full_q(lift.value(lift.end_time()).ravel()))
+
+    high = lift_tcp(RIM + 0.2).translation()
+    assert np.isclose(high[2] - TIPS_BELOW_TCP, RIM + 0.2, atol=1e-3)
+    out_of_reach = lift_tcp(RIM + 2.0).translation()
+    assert np.isclose(out_of_reach[2], RIM + ApproachSettings().lift_height, atol=1e-3)
 
 
 def test_pressing_in_stops_short_of_the_floor():

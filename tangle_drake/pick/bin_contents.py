@@ -56,6 +56,13 @@ class BinContents:
         return np.stack(np.broadcast_arrays(self.origin[0] + np.asarray(i) * self.cell,
                                             self.origin[1] + np.asarray(j) * self.cell), -1)
 
+    def top(self, stray_cells: int = 2) -> float:
+        """The pile's top, m above the floor (0 where nothing was seen), the highest
+        ``stray_cells`` cells left out: a real sensor's stray pixels do not raise it, while a
+        wire standing up (a few cells) still does."""
+        seen = np.sort(self.heights[np.isfinite(self.heights)])
+        return float(seen[-1 - stray_cells]) if seen.size > stray_cells else 0.0
+
     def top_within(self, xy: np.ndarray, radius: float) -> float:
         """The highest point seen within ``radius`` of world ``xy``, m above the floor (0 where
         nothing was seen)."""

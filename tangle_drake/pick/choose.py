@@ -59,10 +59,11 @@ def rank_scored(scored: list[Any], selected: Any = None) -> list[tuple[Any, floa
 
 
 def choose(record: PickRecord, ranked: list[tuple[Any, float | None]], motion: Motion,
-           measured: np.ndarray, empty: Sequence[EmptyGrasp],
-           rule: RepeatRule) -> PickMotion | None:
-    """Plan the first candidate of ``ranked`` that can be done; fills ``record``'s candidate,
-    rank, P(not tangled), rejections and planning time. ``None`` if none can."""
+           measured: np.ndarray, empty: Sequence[EmptyGrasp], rule: RepeatRule,
+           tips_above: float | None = None) -> PickMotion | None:
+    """Plan the first candidate of ``ranked`` that can be done (its lift taking the fingertips
+    up to ``tips_above``, where given); fills ``record``'s candidate, rank, P(not tangled),
+    rejections and planning time. ``None`` if none can."""
     start = time.perf_counter()
     plan = None
     for rank, (candidate, p_not_tangled) in enumerate(ranked):
@@ -75,7 +76,7 @@ def choose(record: PickRecord, ranked: list[tuple[Any, float | None]], motion: M
                                              "a grasp there came up empty"))
             continue
         try:
-            plan = motion.plan_pick(candidate.pose, measured)
+            plan = motion.plan_pick(candidate.pose, measured, tips_above)
         except PlanningError as error:
             record.rejected.append(Rejection(rank, error.kind, error.detail))
             continue

@@ -104,7 +104,8 @@ def pick_settings(scenario: Scenario, **overrides) -> PickSettings:
 
 def closed_loop_settings(scenario: Scenario, **overrides) -> PickSettings:
     """:func:`pick_settings` for the closed loop: weigh every lift (the scenario needs a
-    ``wrist`` force/torque sensor and a tray)."""
+    ``wrist`` force/torque sensor and a tray), the lift high enough for a chain of
+    :data:`HANGING_PARTS` of the pile's longest part to be weighed clear of the pile."""
     missing = [what for what, ok in (("a 'wrist' force/torque sensor",
                                       WRIST in scenario.force_torque_sensors),
                                      ("a 'tray'", scenario.tray is not None)) if not ok]
@@ -112,7 +113,13 @@ def closed_loop_settings(scenario: Scenario, **overrides) -> PickSettings:
         raise TangleDrakeError(f"closed-loop picking needs {' and '.join(missing)} in the "
                                "scenario (as pick_demo.yaml has); without, pick open loop "
                                "(--open-loop)")
-    return pick_settings(scenario, **{"recovery": RecoverySettings(), **overrides})
+    recovery = RecoverySettings(hanging_length=HANGING_PARTS * part_span(scenario.pile))
+    return pick_settings(scenario, **{"recovery": recovery, **overrides})
+
+
+HANGING_PARTS = 2
+"""The longest chain the weighing must see whole: the held part and one hooked on it (a
+third is rare, and a shake drops most seconds)."""
 
 
 TARE_TO_WEIGH = 4.0
@@ -153,6 +160,13 @@ def part_mass(pile: PileConfig) -> float:
     """One part's mass for weighing, kg: the lightest of the pile's parts (a pile of one
     part type weighs in whole parts)."""
     return min(load_part(e.part, mesh_scale=e.mesh_scale).mass for e in pile.parts)
+
+
+def part_span(pile: PileConfig) -> float:
+    """The longest a part of the pile can hang below the point it is held by, m: the
+    diameter of the sphere about its centre of mass that encloses it."""
+    return max(2 * load_part(e.part, mesh_scale=e.mesh_scale).bounding_radius
+               for e in pile.parts)
 
 
 def default_graspability_params(scenario: Scenario) -> GraspabilityParams:
@@ -251,7 +265,6 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
     if station.HasOutputPort("safety.fault"):  # the hardware station's
         builder.Connect(station.GetOutputPort("safety.fault"),
                         planner.GetInputPort("safety.fault"))
-    monitor = None
     payload = None
     if planner_settings.recovery is not None:
         payload = _add_payload(builder, scenario, station, planner, motion)

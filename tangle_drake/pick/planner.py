@@ -371,7 +371,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
             record.reason = "no grasp candidate in the bin"
             return self._nothing_to_pick(context, s, record, t)
         plan = choose(record, ranked, self._motion, self._measured.Eval(context),
-                      s.empty_grasps, self._settings.repeat_rule)
+                      s.empty_grasps, self._settings.repeat_rule, self._tips_above(context))
         if plan is None:
             kinds = Counter(r.kind for r in record.rejected)
             record.failure = pick_failure(kinds)
@@ -385,6 +385,16 @@ class PickPlanner(ClosedLoop, LeafSystem):
         record.started_at = t
         s = replace(s, plan=plan, record=record, started=t, width=self._settings.open_width)
         return self._enter(Mode.APPROACH, s, t)
+
+    def _tips_above(self, context: Context) -> float | None:
+        """Closed loop, where the bin is seen: the world height the lift takes the fingertips
+        to, so that what hangs from them is weighed clear of the pile
+        (``RecoverySettings.hanging_length``); ``None``: the approach's own lift height."""
+        if self._recovery is None or self._recovery.hanging_length <= 0 \
+                or not self._contents.HasValue(context):
+            return None
+        contents = self._contents.Eval(context)
+        return contents.bin.floor_height + contents.top() + self._recovery.hanging_length
 
     @staticmethod
     def _empty(record: PickRecord) -> EmptyGrasp:

@@ -83,6 +83,14 @@ class RecoverySettings:
     hanging parts rest on the pile), whichever comes first..."""
     put_back_samples: int = 3
     """...in this many of the planner's looks in a row (the sensor's noise is ~0.1 N)."""
+    hanging_length: float = 0.0
+    """How far a load of several may hang below the fingertips, m (a held part and one hooked
+    on its far end): where the planner sees the bin (its ``bin_contents`` input), the lift
+    takes the fingertips this far above the top of the pile, so that no hanging part rests on
+    the pile at the weighing and reads light. 0: the lift goes only as high as
+    ``ApproachSettings.lift_height`` above the rim, which is not enough for long parts or a
+    pile that reaches the rim. ``pick.diagram.closed_loop_settings`` sets it from the pile's
+    parts."""
 
     def __post_init__(self) -> None:
         if min(self.max_reweighs, self.max_shakes, self.max_stirs) < 0 or min(
@@ -92,6 +100,8 @@ class RecoverySettings:
         for name in ("tare_timeout", "weigh_timeout", "put_back_clearance", "put_back_force"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"RecoverySettings.{name} must be positive")
+        if not self.hanging_length >= 0:
+            raise ValueError("RecoverySettings.hanging_length must be >= 0")
 
 
 def judge(width: float, estimate: PayloadEstimate | None, empty_width: float) -> Verdict:

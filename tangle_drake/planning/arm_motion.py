@@ -115,25 +115,29 @@ class ArmMotion:
     def hold_command(self, measured: np.ndarray) -> np.ndarray:
         return np.asarray(measured[:_NUM_JOINTS], float).copy()
 
-    def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray) -> PickMotion:
+    def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray,
+                  tips_above: float | None = None) -> PickMotion:
         """Plan the grasp or its 180° twin, the one nearer the current wrist angle first."""
         q_now = self.model.full_q(measured[:_NUM_JOINTS])
         current = self.model.tcp_pose(q_now).rotation()
         errors = []
         for X_grasp in symmetric_grasps(RigidTransform(np.asarray(X_WT, float)), current):
             try:
-                return self._plan(X_grasp, q_now)
+                return self._plan(X_grasp, q_now, tips_above)
             except PlanningError as error:
                 errors.append(error)
         # A twin that got as far as a collision says more than one that was out of reach.
         raise next((e for e in errors if e.kind is FailureKind.COLLISION), errors[0])
 
-    def _plan(self, X_grasp: RigidTransform, q_now: np.ndarray) -> PickMotion:
+    def _plan(self, X_grasp: RigidTransform, q_now: np.ndarray,
+              tips_above: float | None) -> PickMotion:
         poses = pick_poses(X_grasp, self.bin, self.settings.approach, self.model.spec)
         q_pre = self._solve(poses.pregrasp, q_now, "pre-grasp", free=True)
         q_slow = self._solve(poses.slow_start, q_pre, "slow-start", free=False)
         q_grasp = self._solve(poses.grasp, q_slow, "grasp", free=False)
-        q_lift = self._solve(poses.lift, q_pre, "lift", free=True)
+        q_lift = self._lift(X_grasp, q_pre, tips_above) if tips_above is not None else None
+        if q_lift is None:
+            q_lift = self._solve(poses.lift, q_pre, "lift", free=True)
         q_place = self.q_home if self.X_place is None else self._solve(
             self.X_place, q_lift, "place", free=True, free_yaw=True)
 
@@ -155,6 +159,17 @@ class ArmMotion:
         return PickMotion(
             approach=self._legs(approach), descend=descend, lift=lift,
             transfer=transfer, home=home, retreat=retreat, X_WT=poses.grasp.GetAsMatrix4())
+
+    def _lift(self, X_grasp: RigidTransform, q_pre: np.ndarray,
+              tips_above: float) -> np.ndarray | None:
+        """The top of a lift taking the fingertips up to ``tips_above``; ``None`` where the arm
+        cannot reach it (the lift then goes as high as the approach's settings say)."""
+        X_lift = pick_poses(X_grasp, self.bin, self.settings.approach, self.model.spec,
+                            tips_above).lift
+        try:
+            return self._solve(X_lift, q_pre, "lift", free=True)
+        except PlanningError:
+            return None
 
     def plan_shake(self, hold: np.ndarray) -> PiecewisePolynomial:
         """Up and down by the shake's offsets, by IK from the held pose, checked clear."""

@@ -88,11 +88,17 @@ class GantryMotion:
             raise PlanningError(FailureKind.UNREACHABLE, "outside the gantry's travel")
         return q
 
-    def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray) -> PickMotion:
+    def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray,
+                  tips_above: float | None = None) -> PickMotion:
         q_now = self.hold_command(measured)
-        poses = pick_poses(RigidTransform(np.asarray(X_WT, float)), self.bin, self.approach)
+        X_grasp = RigidTransform(np.asarray(X_WT, float))
+        poses = pick_poses(X_grasp, self.bin, self.approach)
         pre, slow, grasp, lift = (self.command_for(X, q_now[3]) for X in
                                   (poses.pregrasp, poses.slow_start, poses.grasp, poses.lift))
+        if tips_above is not None:  # higher, as far as the gantry's travel allows
+            high = pick_poses(X_grasp, self.bin, self.approach, tips_above=tips_above).lift
+            lift[2] = max(lift[2], min(high.translation()[2] + DEFAULT_GRIPPER.tcp_offset,
+                                       self.upper[2]))
 
         leg = _leg
         if self.return_home:

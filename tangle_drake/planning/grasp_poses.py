@@ -36,8 +36,9 @@ class ApproachSettings:
     slow_distance: float = 0.03
     """The last stretch of the descent (and the first of the lift) that is run slowly."""
     lift_height: float = 0.12
-    """After the lift the tool centre is this far above the rim: a part hanging from the
-    grasped one is then out of the bin too, where it can be counted."""
+    """After the lift the tool centre is at least this far above the rim: a part hanging from
+    the grasped one is then out of the bin too, where it can be counted (in a one-layer pile of
+    short parts; a deeper pile or longer parts need ``pick_poses``'s ``tips_above``)."""
     lift_margin: float = 0.06
     """...and at least this far in from every wall (or over the bin's middle, where the bin
     is narrower than twice this), m."""
@@ -70,8 +71,10 @@ class PickPoses:
 
 def pick_poses(X_WT: RigidTransform, bin_config: BinConfig,
                settings: ApproachSettings | None = None,
-               spec: GripperSpec = DEFAULT_GRIPPER) -> PickPoses:
-    """The waypoints for the grasp candidate at ``X_WT`` in the bin ``bin_config``."""
+               spec: GripperSpec = DEFAULT_GRIPPER, tips_above: float | None = None) -> PickPoses:
+    """The waypoints for the grasp candidate at ``X_WT`` in the bin ``bin_config``; the lift
+    also takes the fingertips up to the world height ``tips_above``, where given (the pile's
+    top plus what may hang from the grasp, so that it is weighed clear of the pile)."""
     settings = settings or ApproachSettings()
     R = X_WT.rotation()
     approach = R.col(2)
@@ -91,8 +94,10 @@ def pick_poses(X_WT: RigidTransform, bin_config: BinConfig,
     p_pre = p_grasp - back * approach
     centre = np.asarray(bin_config.center, float)
     room = np.maximum(np.asarray(bin_config.inner_size, float) / 2 - settings.lift_margin, 0.0)
-    p_lift = np.array([*np.clip(p_pre[:2], centre - room, centre + room),
-                       max(p_pre[2], rim_height + settings.lift_height)])
+    lift_z = max(p_pre[2], rim_height + settings.lift_height)
+    if tips_above is not None:
+        lift_z = max(lift_z, tips_above + tips_below_tcp)
+    p_lift = np.array([*np.clip(p_pre[:2], centre - room, centre + room), lift_z])
     return PickPoses(RigidTransform(R, p_pre),
                      RigidTransform(R, p_grasp - settings.slow_distance * approach),
                      RigidTransform(R, p_grasp), RigidTransform(R, p_lift))

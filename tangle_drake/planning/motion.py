@@ -95,9 +95,12 @@ class Motion(Protocol):
     def hold_command(self, measured: np.ndarray) -> np.ndarray:
         """The command that keeps the manipulator where ``measured`` says it is."""
 
-    def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray) -> PickMotion:
-        """The whole pick for tool pose ``X_WT`` from the state ``measured``; raises
-        :class:`PlanningError` when it cannot be done."""
+    def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray,
+                  tips_above: float | None = None) -> PickMotion:
+        """The whole pick for tool pose ``X_WT`` from the state ``measured``, the lift taking
+        the fingertips up to the world height ``tips_above`` where given and the manipulator
+        can (else as high as the approach's settings say); raises :class:`PlanningError`
+        when it cannot be done."""
 
     def plan_shake(self, hold: np.ndarray) -> PiecewisePolynomial:
         """A shake of the tool about the command ``hold`` (up and down, :class:`ShakeSettings`),
