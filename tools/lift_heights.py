@@ -14,9 +14,6 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 
-import numpy as np
-from pydrake.systems.analysis import Simulator
-
 from tangle_drake.bench.trials import pile_seed
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.parts import BUILTIN_PARTS
@@ -26,6 +23,7 @@ from tangle_drake.pile import PileSettler
 from tangle_drake.planning.grasp_poses import ApproachSettings
 from tangle_drake.scenario import PartCount
 from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.scene import render_depth
 from tangle_drake.station import build_station, camera_model
 
 
@@ -47,14 +45,8 @@ def main() -> None:
         station = build_station(scenario)
         settler = PileSettler(station, scenario)
         for trial in range(args.piles):
-            pile = settler.settle(pile_seed(args.seed, part, trial))
-            simulator = Simulator(station)  # the camera's first image is of the settled pile
-            context = simulator.get_mutable_context()
-            station.hold_still(context)
-            station.set_plant_state(context, pile.state)
-            station.GetInputPort("gripper.position").FixValue(context, [0.0])
-            simulator.Initialize()
-            depth = np.asarray(station.GetOutputPort("camera.depth_image").Eval(context).data)
+            settler.settle(pile_seed(args.seed, part, trial))
+            depth = render_depth(station, settler.simulator.get_context())
             top = bin_contents(depth, camera_model(scenario), scenario.bin).top()
             tips = max(fixed, top + hang)
             print(f"{part} pile {trial}: top {top * 100:.1f} cm, chain {hang * 100:.1f} cm, "
