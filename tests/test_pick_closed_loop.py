@@ -85,8 +85,33 @@ class FakeScale(LeafSystem):
                            0, 0, 0])
 
 
+class SlippingGripper(LeafSystem):
+    """``gripper.state_measured`` of fingers that hold a 3 mm wire, but in the first lift
+    only until ``slip_after`` s into it: then they close on nothing (the part slid out)."""
+
+    def __init__(self, slip_after: float) -> None:
+        super().__init__()
+        self.slip_after = slip_after
+        self.lift_since = None
+        self.lifts = 0
+        self.mode = self.DeclareAbstractInputPort("mode", AbstractValue.Make(Mode.SETTLE))
+        self.DeclareVectorOutputPort("width", 2, self._calc, {self.time_ticket(),
+                                                              self.all_input_ports_ticket()})
+
+    def _calc(self, context, out) -> None:
+        mode, t = self.mode.Eval(context), context.get_time()
+        if mode is Mode.LIFT and self.lift_since is None:
+            self.lift_since, self.lifts = t, self.lifts + 1
+        elif mode is Mode.APPROACH:
+            self.lift_since = None
+        slipped = self.lifts == 1 and self.lift_since is not None \
+            and t - self.lift_since >= self.slip_after
+        out.SetFromVector([0.0005 if slipped else 0.003, 0.0])
+
+
 def run(candidates, weighings, motion=None, width=0.003, picks=1, rest_drop=0.0,
-        recovery=None, duration=60.0, contents=None, push=(0.0, 0.0, 0.0), log=None):
+        recovery=None, duration=60.0, contents=None, push=(0.0, 0.0, 0.0), log=None,
+        slip_after=None, commands=None):
     motion = motion or FakeMotion()
     settings = PickSettings(max_picks=picks, recovery=recovery or RecoverySettings())
     builder = DiagramBuilder()
@@ -98,7 +123,11 @@ def run(candidates, weighings, motion=None, width=0.003, picks=1, rest_drop=0.0,
         builder.Connect(view.get_output_port(), planner.GetInputPort("bin_contents"))
     measured = builder.AddSystem(ConstantVectorSource(np.zeros(4)))
     builder.Connect(measured.get_output_port(), planner.GetInputPort("arm.state_measured"))
-    gripper = builder.AddSystem(ConstantVectorSource(np.array([width, 0.0])))
+    if slip_after is None:
+        gripper = builder.AddSystem(ConstantVectorSource(np.array([width, 0.0])))
+    else:
+        gripper = builder.AddSystem(SlippingGripper(slip_after))
+        builder.Connect(planner.GetOutputPort("mode"), gripper.GetInputPort("mode"))
     builder.Connect(gripper.get_output_port(), planner.GetInputPort("gripper.state_measured"))
     scale = builder.AddSystem(FakeScale(weighings, rest_drop, push))
     builder.Connect(planner.GetOutputPort("payload.request"), scale.GetInputPort("request"))
@@ -111,8 +140,12 @@ def run(candidates, weighings, motion=None, width=0.003, picks=1, rest_drop=0.0,
     modes, times = [], {}
     while simulator.get_context().get_time() < duration:
         simulator.AdvanceTo(simulator.get_context().get_time() + 0.01)
-        scale.GetOutputPort("wrench").Eval(scale_context)  # (it notes when a mode begins)
+        scale.GetOutputPort("wrench").Eval(scale_context)  # (they note when a mode begins)
+        if slip_after is not None:
+            gripper.get_output_port().Eval(gripper.GetMyContextFromRoot(simulator.get_context()))
         mode = planner.GetOutputPort("mode").Eval(context)
+        if commands is not None:
+            commands.append(planner.GetOutputPort(motion.command_port).Eval(context).copy())
         if not modes or modes[-1] is not mode:
             modes.append(mode)
             times.setdefault(mode, simulator.get_context().get_time())
@@ -169,11 +202,41 @@ def test_nothing_came_up_and_the_next_look_goes_elsewhere():
     assert second.disposition is Disposition.DELIVERED
 
 
-def test_fingers_closed_on_nothing_need_no_weighing():
-    records, _, _, times = run([candidate(i, 0.9 - 0.1 * i) for i in range(3)], [],
-                               width=0.0005, recovery=RecoverySettings(max_attempts=2))
+def test_fingers_closed_on_nothing_back_out_at_once_without_weighing():
+    records, modes, _, times = run([candidate(i, 0.9 - 0.1 * i) for i in range(3)], [],
+                                   width=0.0005, recovery=RecoverySettings(max_attempts=2))
     assert [r.disposition for r in records[:2]] == [Disposition.EMPTY] * 2
-    assert times[Mode.RETREAT] - times[Mode.WEIGH] < 0.05
+    assert Mode.WEIGH not in modes and times[Mode.RETREAT] - times[Mode.LIFT] < 0.05
+    assert "closed on nothing" in records[0].reason
+
+
+def test_a_part_that_slides_out_early_in_the_lift_backs_out_the_way_it_came():
+    commands, log = [], []
+    records, modes, _, times = run([candidate(0, 0.9), candidate(1, 0.8)], [1],
+                                   slip_after=0.1, commands=commands, log=log)
+    first, second = records
+    assert first.disposition is Disposition.EMPTY and first.verdict is Verdict.NONE
+    assert "backed out" in first.reason and second.disposition is Disposition.DELIVERED
+    assert times[Mode.RETREAT] - times[Mode.LIFT] == pytest.approx(0.1, abs=0.03)
+    assert modes.index(Mode.RETREAT) < modes.index(Mode.WEIGH)  # the first grasp is not weighed
+    # The command turns back without a jump: no step larger than the moves' own (~1 rad/s).
+    steps = np.abs(np.diff(np.array(commands), axis=0)).max()
+    assert steps < 0.02
+    # ... and the next look comes sooner than after lifting on, weighing nothing, going home.
+    weighed_log = []
+    run([candidate(0, 0.9), candidate(1, 0.8)], [0, 1], log=weighed_log)
+    second_look = [[t for mode, t in entries if mode is Mode.PERCEIVE][1]
+                   for entries in (log, weighed_log)]
+    assert second_look[0] < second_look[1] - 1.0
+
+
+def test_a_part_that_slides_out_past_the_slow_stretch_is_found_at_the_top():
+    records, modes, _, times = run([candidate(0, 0.9), candidate(1, 0.8)], [1],
+                                   slip_after=0.5)
+    first = records[0]
+    assert first.disposition is Disposition.EMPTY and "backed out" not in (first.reason or "")
+    assert modes[modes.index(Mode.LIFT) + 1] is Mode.WEIGH
+    assert times[Mode.RETREAT] - times[Mode.WEIGH] < 0.05  # closed fingers need no weighing
 
 
 def test_a_doubtful_weighing_is_repeated_and_a_lasting_doubt_is_never_delivered():

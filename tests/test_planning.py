@@ -136,6 +136,24 @@ def test_the_gantry_lifts_a_chain_clear_within_its_travel():
     assert np.isclose(lift_top(rim + 5.0)[2], motion.upper[2])  # as high as it goes
 
 
+def test_the_gantry_backs_out_the_way_it_came():
+    from tangle_drake.drivers.limits import station_limits
+    from tangle_drake.planning.gantry_motion import GantryMotion
+    from tangle_drake.scenario_files import resolve_scenario
+
+    scenario = resolve_scenario("floating_gripper.yaml")
+    motion = GantryMotion(scenario.bin, station_limits(scenario))
+    start = motion.home
+    plan = motion.plan_pick(top_down(*scenario.bin.center, scenario.bin.floor_height + 0.02)
+                            .GetAsMatrix4(), np.concatenate([start, np.zeros(4)]))
+    slow = plan.lift.get_segment_times()[2]  # the lift's first leg is a trapezoid
+    for t in np.linspace(0.0, slow, 7):
+        assert np.allclose(value(plan.back_out, t), value(plan.lift, t), atol=1e-12)
+    assert np.allclose(value(plan.back_out, plan.back_out.end_time()), start)
+    top = value(plan.back_out, plan.back_out.end_time() / 2)
+    assert top[2] < value(plan.lift, plan.lift.end_time())[2]  # not up to the lift's top
+
+
 def test_the_arm_lifts_a_chain_clear_where_it_reaches_and_as_before_where_not(motion):
     def lift_tcp(tips_above):
         lift = motion.plan_pick(IN_BIN.GetAsMatrix4(), MEASURED_HOME, tips_above).lift
@@ -216,13 +234,14 @@ def plan(motion):
 
 
 PHASES = ("approach", "descend", "lift", "transfer", "home")
+MOVES = (*PHASES, "retreat", "back_out")
 
 
 def samples(trajectory, step=0.004):
     return np.arange(0.0, trajectory.end_time() + 1e-9, step)
 
 
-@pytest.mark.parametrize("phase", PHASES)
+@pytest.mark.parametrize("phase", MOVES)
 def test_planned_phases_keep_within_the_planning_limits(plan, phase):
     trajectory = getattr(plan, phase)
     for t in samples(trajectory):
@@ -243,16 +262,32 @@ def test_phases_join_up_and_only_the_left_arm_moves(plan):
         assert np.allclose(moved, 0.0)
 
 
-@pytest.mark.parametrize("phase", PHASES)
+@pytest.mark.parametrize("phase", MOVES)
 def test_planned_phases_keep_clear_of_the_bin_and_the_robot(motion, plan, phase):
     trajectory = getattr(plan, phase)
-    near_pile = phase in ("descend", "lift")
+    near_pile = phase in ("descend", "lift", "back_out")
     for t in samples(trajectory, 0.02):
         clearance = motion.model.clearance(motion.model.full_q(trajectory.value(t).ravel()))
         # The collision checks sample the joint-space lines; between samples the margin may
         # shrink by about what the wrist moves in one step.
         assert clearance.to_bin >= (-0.001 if near_pile else 0.005), t
         assert clearance.to_self >= 0.0
+
+
+def value(trajectory, t: float) -> np.ndarray:
+    return trajectory.value(t).ravel()
+
+
+def test_the_back_out_begins_as_the_lift_and_goes_back_the_way_the_pick_came(plan):
+    back_out, lift = plan.back_out, plan.lift
+    shared = [t for t in samples(lift, 0.01) if np.allclose(value(back_out, t), value(lift, t),
+                                                               rtol=0.0, atol=1e-9)]
+    assert 0.3 < shared[-1] < lift.end_time()  # the slow stretch up from the grasp, then apart
+    assert np.allclose(value(back_out, 0.0), value(plan.descend, plan.descend.end_time()))
+    passes = [np.abs(value(back_out, t) - value(plan.approach, plan.approach.end_time())).max()
+              for t in samples(back_out, 0.01)]
+    assert min(passes) < 1e-3  # through the pre-grasp
+    assert np.allclose(value(back_out, back_out.end_time()), HOME)  # to where it began
 
 
 def test_descent_is_straight_and_slow_near_the_part(motion, plan):

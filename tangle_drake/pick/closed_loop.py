@@ -27,6 +27,10 @@ from tangle_drake.pick.stir import looks_empty, stir_line, stir_poses
 from tangle_drake.planning.motion import PlanningError
 from tangle_drake.planning.trajectory import chain
 
+RETRACE_TOLERANCE = 1e-9
+"""How near (rad or m) the back-out's command must be to the lift's for the planner to switch
+to it: they are the same leg while the lift retraces the descent."""
+
 FALLBACK = {Mode.SHAKE: Mode.WEIGH, Mode.SHAKE_OFF: Mode.WEIGH_OPEN, Mode.PUT_BACK: Mode.OPEN,
              Mode.RAISE: Mode.RETREAT}
 """Where a recovery move that cannot be planned goes instead: a shake is skipped, a put-back
@@ -78,19 +82,10 @@ class ClosedLoop:
             return self._enter(Mode.RAISE, replace(s, record=replace(record, disposition=step),
                                                    loop=loop), t)
         if record.verdict is None:  # the first weighing: what came up
-            record = self._check(context, record)
-            if record.lifted is None:  # hardware: the weighing is all there is
-                record = replace(record, outcome={Verdict.NONE: Outcome.NONE,
-                                                  Verdict.ONE: Outcome.ONE,
-                                                  Verdict.SEVERAL: Outcome.SEVERAL}.get(
-                                                      verdict, Outcome.HELD))
-            record = replace(record, estimate=estimate, verdict=verdict)
+            record = self._came_up(context, record, verdict, estimate)
         step = after_weighing(verdict, loop.reweighs, loop.shakes, recovery)
         if isinstance(step, Disposition):
-            held = self._held_now(context)
-            record = replace(record, disposition=step,
-                             held_decided=None if held is None else held[0])
-            s = replace(s, record=record, loop=loop)
+            s = replace(s, record=self._decided(context, record, step), loop=loop)
             if step is Disposition.DELIVERED:
                 return self._enter(Mode.TRANSFER, s, t)
             return self._enter(Mode.RETREAT, replace(
@@ -103,6 +98,45 @@ class ClosedLoop:
             return self._enter(Mode.SHAKE, replace(s, record=record, loop=replace(
                 loop, shakes=loop.shakes + 1)), t)
         return self._enter(Mode.PUT_BACK, replace(s, record=record, loop=loop), t)
+
+    def _came_up(self, context: Context, record: PickRecord, verdict: Verdict,
+                 estimate: PayloadEstimate | None) -> PickRecord:
+        """``record`` with what the first look at the load said came up (and, in simulation,
+        what did)."""
+        record = self._check(context, record)
+        if record.lifted is None:  # hardware: the weighing is all there is
+            record = replace(record, outcome={Verdict.NONE: Outcome.NONE,
+                                              Verdict.ONE: Outcome.ONE,
+                                              Verdict.SEVERAL: Outcome.SEVERAL}.get(
+                                                  verdict, Outcome.HELD))
+        return replace(record, estimate=estimate, verdict=verdict)
+
+    def _decided(self, context: Context, record: PickRecord,
+                 disposition: Disposition) -> PickRecord:
+        held = self._held_now(context)
+        return replace(record, disposition=disposition,
+                       held_decided=None if held is None else held[0])
+
+    def _closed_on_nothing(self, context: Context, s: PlannerState, t: float) -> PlannerState:
+        """During the lift: fingers closed past ``empty_width`` hold nothing (the part slid
+        out of the grip as it came up, or there was none). While the lift still retraces the
+        descent, go back out the way the pick came in (``PickMotion.back_out``) rather than up
+        to the weighing and over to home; past that, lift on (the weighing needs no wait)."""
+        width = float(self._gripper.Eval(context)[0])
+        if judge(width, None, self._settings.empty_width) is not Verdict.NONE:
+            return s
+        played = t - s.since
+        back_out, lift = s.plan.back_out, s.plan.lift
+        if played > back_out.end_time() or not np.allclose(
+                back_out.value(played), lift.value(played), rtol=0.0, atol=RETRACE_TOLERANCE):
+            return s
+        record = self._came_up(context, s.record, Verdict.NONE, None)
+        record = with_reason(self._decided(context, record, Disposition.EMPTY),
+                             f"the fingers closed on nothing {played:.2f} s into the lift: "
+                             "backed out the way the pick came")
+        # RETREAT, playing the back-out from where the lift has got to.
+        return replace(s, mode=Mode.RETREAT, since=t - played, trajectory=back_out,
+                       record=record, empty_grasps=(*s.empty_grasps, self._empty(record)))
 
     def _plan_recovery(self, mode: Mode, s: PlannerState) -> PiecewisePolynomial | None:
         """The trajectory of a recovery move, planned from where the tool is; ``None`` if it

@@ -8,7 +8,8 @@ Open loop (the paper's; ``PickSettings.recovery`` is ``None``)::
 Closed loop (``recovery`` set; :mod:`.recovery` says what follows a weighing)::
 
     ... APPROACH -> TARE -> DESCEND -> CLOSE -> LIFT -> WEIGH -+-> TRANSFER -> RELEASE -> HOME
-                                                               +-> RETREAT (nothing came up)
+                                                 |             +-> RETREAT (nothing came up)
+                                                 +-> RETREAT, backing out (fingers closed early)
                         WEIGH again <- SHAKE <-----------------+
                         PUT_BACK -> OPEN -> WEIGH_OPEN (-> SHAKE_OFF) -> RAISE -> RETREAT
     PERCEIVE -> STIR -> SETTLE   (nothing to pick, or max_attempts grasps without a delivery)
@@ -25,8 +26,10 @@ the pre-grasp and WEIGH has the load weighed at the top of the lift (``payload.r
 the :class:`~tangle_drake.pick.payload.PayloadEstimator`, ``payload`` back); one part is
 delivered to the tray, nothing is left for a fresh look, several are shaken and, if that does
 not help, put back on the pile: lowered slowly until ``wrist.force_torque`` shows the load
-resting on the pile, released, weighed again for a part hooked on a finger. A grasp that came
-up empty is not tried again while the pile there is unchanged. Open loop, after
+resting on the pile, released, weighed again for a part hooked on a finger. Fingers that
+close on nothing while the lift still retraces the descent (the part slid out of the grip as
+it came up) back out the way the pick came, with no weighing. A grasp that came up empty is
+not tried again while the pile there is unchanged. Open loop, after
 ``max_picks`` picks the planner is DONE; closed loop, after ``max_picks`` deliveries, or
 ``recovery.max_attempts`` grasps in a row without one (it gives up). When nothing can be
 picked (no candidate, none reachable: the next look would see the same pile) it is DONE too,
@@ -227,6 +230,9 @@ class PickPlanner(ClosedLoop, LeafSystem):
             return stopped
         if s.mode is Mode.STIR:
             return self._stirring(context, s, t)
+        if s.mode is Mode.LIFT and self._recovery is not None \
+                and (backing := self._closed_on_nothing(context, s, t)) is not s:
+            return backing
         if s.mode in _MOVING and elapsed >= s.trajectory.end_time():
             return self._enter(self._after_move(s.mode), s, t)
         if s.mode is Mode.CLOSE and elapsed >= settings.close_delay and s.width > 0:

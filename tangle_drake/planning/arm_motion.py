@@ -143,12 +143,15 @@ class ArmMotion:
 
         approach = self._free_path([q_now, q_pre], [q_now, q_lift, q_pre], "approach")
         s = self.settings
+        fast = self._straight(q_pre, q_slow, "descent")
         slow = self._straight(q_slow, q_grasp, "descent")
         # Planned in this order, so the first leg that fails is the one reported.
-        descend = chain([self._legs(self._straight(q_pre, q_slow, "descent"), s.cartesian_speed),
-                         self._legs(slow, s.slow_speed)])
-        lift = chain([self._legs(slow[::-1], s.slow_speed),
+        descend = chain([self._legs(fast, s.cartesian_speed), self._legs(slow, s.slow_speed)])
+        up_slowly = self._legs(slow[::-1], s.slow_speed)
+        lift = chain([up_slowly,
                       self._legs(self._straight(q_slow, q_lift, "lift"), s.cartesian_speed)])
+        back_out = chain([up_slowly, self._legs(fast[::-1], s.cartesian_speed),
+                          self._legs(approach[::-1])])
         transfer = self._legs(self._free_path([q_lift, q_place], None, "transfer"))
         home = self._legs(self._free_path([q_place, self.q_home], None, "return home")
                           if self.X_place is not None else [self.q_home, self.q_home])
@@ -158,7 +161,8 @@ class ArmMotion:
             retreat = chain([transfer, home])
         return PickMotion(
             approach=self._legs(approach), descend=descend, lift=lift,
-            transfer=transfer, home=home, retreat=retreat, X_WT=poses.grasp.GetAsMatrix4())
+            transfer=transfer, home=home, retreat=retreat, back_out=back_out,
+            X_WT=poses.grasp.GetAsMatrix4())
 
     def _lift(self, X_grasp: RigidTransform, q_pre: np.ndarray,
               tips_above: float) -> np.ndarray | None:

@@ -106,11 +106,14 @@ class GantryMotion:
             transfer, home, retreat = leg(lift, place), leg(place, self.home), leg(lift, self.home)
         else:
             transfer = home = retreat = hold(lift, MIN_DURATION)
+        up_slowly = leg(grasp, slow, PLANNING_SLOW_SPEED)
         return PickMotion(
             approach=leg(q_now, pre, free=True),
             descend=chain([leg(pre, slow, free=True), leg(slow, grasp, PLANNING_SLOW_SPEED)]),
-            lift=chain([leg(grasp, slow, PLANNING_SLOW_SPEED), leg(slow, lift)]),
-            transfer=transfer, home=home, retreat=retreat, X_WT=poses.grasp.GetAsMatrix4())
+            lift=chain([up_slowly, leg(slow, lift)]),
+            transfer=transfer, home=home, retreat=retreat,
+            back_out=chain([up_slowly, leg(slow, pre, free=True), leg(pre, q_now, free=True)]),
+            X_WT=poses.grasp.GetAsMatrix4())
 
     def plan_shake(self, hold_command: np.ndarray) -> PiecewisePolynomial:
         s = self.shake

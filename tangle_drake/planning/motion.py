@@ -58,7 +58,11 @@ class PickMotion:
     The approach ends with the open fingers above the grasp, the descent at the grasp, the
     lift clear of the bin, the transfer over the place location (the output tray), home where
     the robot waits while the camera looks, and the retreat goes from the top of the lift
-    straight home (after an empty grasp, or a load put back).
+    straight home (after an empty grasp, or a load put back). The back-out goes from the grasp
+    the way the descent and the approach came, back to where the approach began: for fingers
+    found closed on nothing early in the lift, which then need not go up and over to home.
+    It begins as the lift does (the slow stretch up from the grasp), so the planner can switch
+    to it there without a jump.
     """
 
     approach: PiecewisePolynomial
@@ -67,6 +71,7 @@ class PickMotion:
     transfer: PiecewisePolynomial
     home: PiecewisePolynomial
     retreat: PiecewisePolynomial
+    back_out: PiecewisePolynomial
     X_WT: np.ndarray
     """The grasp pose used (4x4): the candidate's, or its twin turned 180° about the approach,
     pressed a little deeper (:mod:`tangle_drake.planning.grasp_poses`)."""
