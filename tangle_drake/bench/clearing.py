@@ -52,10 +52,12 @@ class _Rig:
 
 class ClearWorker:
     """Clears bins (``(part index, trial index)``) for a :class:`BenchConfig` with ``clear``
-    set; keeps each part's rig once built."""
+    set; keeps each part's rig once built. ``hanging_parts``: see :func:`clearing_diagram`
+    (a probe of the lift's height sets it; the benchmark keeps the default)."""
 
-    def __init__(self, config: BenchConfig) -> None:
+    def __init__(self, config: BenchConfig, hanging_parts: float | None = None) -> None:
         self.config = config
+        self.hanging_parts = hanging_parts
         self._rigs: dict[str, _Rig] = {}
 
     def run_task(self, task: tuple[int, int]) -> dict:
@@ -78,7 +80,8 @@ class ClearWorker:
         if spec.name not in self._rigs:
             scenario = part_scenario(self.config, spec)
             methods = self.config.methods[spec.name]
-            pick = clearing_diagram(scenario, methods, spec.name, self.config.open_loop)
+            pick = clearing_diagram(scenario, methods, spec.name, self.config.open_loop,
+                                    self.hanging_parts)
             self._rigs[spec.name] = _Rig(PileSettler(build_station(scenario), scenario),
                                          PickEpisode(pick), scenario,
                                          {m.name: m for m in methods})
@@ -158,12 +161,14 @@ class EscapeWatch:
 
 
 def clearing_diagram(scenario: Scenario, methods: Sequence[Method], part: str,
-                     open_loop: bool = False) -> PickDiagram:
+                     open_loop: bool = False,
+                     hanging_parts: float | None = None) -> PickDiagram:
     """The pick diagram that clears a bin of ``scenario``: closed loop (at most one delivery
-    per part in the pile) or open loop (two grasps per part)."""
+    per part in the pile; ``hanging_parts`` as :func:`closed_loop_settings` takes it) or open
+    loop (two grasps per part)."""
     count = scenario.pile.total_count
     settings = pick_settings(scenario, max_picks=2 * count) if open_loop \
-        else closed_loop_settings(scenario, max_picks=count)
+        else closed_loop_settings(scenario, hanging_parts, max_picks=count)
     return build_pick_diagram(
         scenario, TangleChoice(None, FALLBACK_RULE), motion_for(scenario),
         station=build_station(scenario), settings=settings,

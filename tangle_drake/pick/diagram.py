@@ -102,10 +102,12 @@ def pick_settings(scenario: Scenario, **overrides) -> PickSettings:
                            **overrides})
 
 
-def closed_loop_settings(scenario: Scenario, **overrides) -> PickSettings:
+def closed_loop_settings(scenario: Scenario, hanging_parts: float | None = None,
+                         **overrides) -> PickSettings:
     """:func:`pick_settings` for the closed loop: weigh every lift (the scenario needs a
     ``wrist`` force/torque sensor and a tray), the lift high enough for a chain of
-    :data:`HANGING_PARTS` of the pile's longest part to be weighed clear of the pile."""
+    ``hanging_parts`` (default :data:`HANGING_PARTS`; 0: the approach's fixed lift) of the
+    pile's longest part to be weighed clear of the pile."""
     missing = [what for what, ok in (("a 'wrist' force/torque sensor",
                                       WRIST in scenario.force_torque_sensors),
                                      ("a 'tray'", scenario.tray is not None)) if not ok]
@@ -113,7 +115,9 @@ def closed_loop_settings(scenario: Scenario, **overrides) -> PickSettings:
         raise TangleDrakeError(f"closed-loop picking needs {' and '.join(missing)} in the "
                                "scenario (as pick_demo.yaml has); without, pick open loop "
                                "(--open-loop)")
-    recovery = RecoverySettings(hanging_length=HANGING_PARTS * part_span(scenario.pile))
+    if hanging_parts is None:
+        hanging_parts = HANGING_PARTS
+    recovery = RecoverySettings(hanging_length=hanging_parts * part_span(scenario.pile))
     return pick_settings(scenario, **{"recovery": recovery, **overrides})
 
 
