@@ -461,6 +461,18 @@ def test_several_read_as_one_is_judged_at_the_weighing_that_decided_the_delivery
     assert read_as_one(grasp(held=2, decided=None, recoveries=["SHAKE", "REWEIGH"])) == 0
 
 
+def test_a_weighing_with_a_part_on_the_pile_counts_and_fingers_closed_on_nothing_do_not():
+    def grasp(resting, weighed, verdict):
+        return {"outcome": "NONE", "failure": None, "lifted": 0, "held": 1,
+                "resting": resting, "held_decided": 1, "recoveries": [], "weighed": weighed,
+                "verdict": verdict, "disposition": "EMPTY", "landed": 0}
+
+    run = {"method": "m", "delivered": 0, "left_in_bin": 1, "lost": 0, "sim_s": 10.0,
+           "compute_s": 1.0, "grasps": [grasp(1, 0.4, "NONE"), grasp(1, None, "UNSURE"),
+                                        grasp(2, None, "NONE"), grasp(0, 1.0, "ONE")]}
+    assert figures([run])["weighed_resting"] == 2
+
+
 def test_lost_parts_are_reported_by_the_mode_they_left_the_bin_in():
     runs = [{"method": "m", "grasps": [], "delivered": 3, "left_in_bin": 0, "lost": 3,
              "sim_s": 10.0, "compute_s": 1.0,

@@ -40,7 +40,7 @@ def _counts(runs: Sequence[dict]) -> dict:
         "deliveries": len(landed), "exactly_one": sum(n == 1 for n in landed),
         "several": sum(n >= 2 for n in landed),
         "several_read_as_one": sum(_several_read_as_one(g) for g in grasps),
-        "weighed_resting": sum((g.get("resting") or 0) > 0 for g in grasps),
+        "weighed_resting": sum(_weighed_resting(g) for g in grasps),
         "grasps": sum(g["outcome"] != "FAILED" for g in grasps),
         "shakes": sum(r in ("SHAKE", "SHAKE_OFF") for g in grasps for r in g["recoveries"]),
         "stirs": sum(r == "STIR" for g in grasps for r in g["recoveries"]),
@@ -51,6 +51,14 @@ def _counts(runs: Sequence[dict]) -> dict:
         "lost": sum(run["lost"] for run in runs), "hours": hours,
         "lost_by_mode": _lost_by_mode(runs),
     }
+
+
+def _weighed_resting(grasp: dict) -> bool:
+    """The first weighing came while a held part still touched the pile. A grasp the
+    fingers judged empty (closed past the empty width) was not weighed: what the simulation
+    saw then, the closed fingers pressing on the pile early in the lift, is no weighing's."""
+    judged_by_fingers = grasp.get("verdict") == "NONE" and grasp.get("weighed") is None
+    return (grasp.get("resting") or 0) > 0 and not judged_by_fingers
 
 
 def _several_read_as_one(grasp: dict) -> bool:
