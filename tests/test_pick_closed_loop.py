@@ -111,10 +111,9 @@ class SlippingGripper(LeafSystem):
 
 def run(candidates, weighings, motion=None, width=0.003, picks=1, rest_drop=0.0,
         recovery=None, duration=60.0, contents=None, push=(0.0, 0.0, 0.0), log=None,
-        slip_after=None, commands=None, look_from_tray=False):
+        slip_after=None, commands=None):
     motion = motion or FakeMotion()
-    settings = PickSettings(max_picks=picks, recovery=recovery or RecoverySettings(),
-                            look_from_tray=look_from_tray)
+    settings = PickSettings(max_picks=picks, recovery=recovery or RecoverySettings())
     builder = DiagramBuilder()
     planner = builder.AddSystem(PickPlanner(motion, settings))
     source = builder.AddSystem(_Candidates(candidates))
@@ -174,51 +173,6 @@ def test_several_are_shaken_and_one_left_is_delivered():
                           Mode.CLOSE, Mode.LIFT, Mode.WEIGH, Mode.SHAKE, Mode.WEIGH,
                           Mode.TRANSFER, Mode.RELEASE]
     assert modes[-1] is Mode.DONE
-
-
-@pytest.mark.parametrize("look_from_tray", [False, True])
-def test_after_a_release_the_next_look_is_from_over_the_tray_and_the_last_goes_home(
-        look_from_tray):
-    records, modes, _, _ = run([candidate(0, 0.9)], [1, 1], picks=2,
-                               look_from_tray=look_from_tray)
-    assert [r.disposition for r in records] == [Disposition.DELIVERED] * 2
-    after_first = modes[modes.index(Mode.RELEASE) + 1]
-    assert after_first is (Mode.SETTLE if look_from_tray else Mode.HOME)
-    assert modes[-3:] == [Mode.RELEASE, Mode.HOME, Mode.DONE]
-
-
-@pytest.mark.parametrize("name", ["pick_demo.yaml", "floating_gripper.yaml", "dense_bin.yaml"])
-def test_the_robot_over_the_tray_leaves_the_cameras_view_of_the_bin_clear(name):
-    from dataclasses import replace
-
-    from pydrake.math import RigidTransform, RotationMatrix
-
-    from tangle_drake.planning.motions import motion_for
-    from tangle_drake.robot import HOME
-    from tangle_drake.scenario import PartCount
-    from tangle_drake.scenario_files import resolve_scenario
-    from tangle_drake.scene import render_depth
-    from tangle_drake.station import build_station
-
-    scenario = resolve_scenario(name)
-    scenario = replace(scenario, view_cameras=[],
-                       pile=replace(scenario.pile, parts=[PartCount("u_hook", 0)]))
-    motion = motion_for(scenario)
-    home = np.asarray(HOME) if motion.command_size == len(HOME) else np.asarray(motion.home)
-    grasp = RigidTransform(RotationMatrix.MakeXRotation(np.pi),
-                           [*scenario.bin.center, scenario.bin.floor_height + 0.02])
-    plan = motion.plan_pick(grasp.GetAsMatrix4(), np.concatenate([home, 0 * home]))
-    over_tray = plan.transfer.value(plan.transfer.end_time()).ravel()
-    station = build_station(scenario)
-    context = station.CreateDefaultContext()
-    plant = station.GetSubsystemByName("plant")
-    robot = plant.GetModelInstanceByName(motion.command_port.split(".")[0])
-    views = []
-    for q in (home, over_tray):
-        plant.SetPositions(plant.GetMyMutableContextFromRoot(context), robot, q)
-        views.append(np.nan_to_num(render_depth(station, context), nan=-1.0))
-    assert np.linalg.norm(over_tray - home) > 0.1  # it did move
-    assert np.array_equal(views[0], views[1])
 
 
 def test_several_after_a_shake_are_put_back_and_the_gripper_weighed_open():

@@ -118,8 +118,7 @@ def closed_loop_settings(scenario: Scenario, hanging_parts: float | None = None,
     if hanging_parts is None:
         hanging_parts = HANGING_PARTS
     recovery = RecoverySettings(hanging_length=hanging_parts * part_span(scenario.pile))
-    return pick_settings(scenario, **{"recovery": recovery, "look_from_tray": True,
-                                      **overrides})
+    return pick_settings(scenario, **{"recovery": recovery, **overrides})
 
 
 HANGING_PARTS = 2

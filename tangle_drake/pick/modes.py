@@ -91,11 +91,6 @@ class PickSettings:
     last pick: a frozen camera must not drive a pick."""
     recovery: RecoverySettings | None = None
     """``None``: open loop (the paper's). Else weigh every lift and act on it."""
-    look_from_tray: bool = False
-    """After a release, look from over the tray and approach the next grasp from there,
-    instead of going home first (the last delivery still goes home). Saves the way home, a
-    second a part on the Nextage; the robot over the tray must leave the camera's view of the
-    bin clear, as it does in every shipped scenario."""
     record_crop: CropSpec | None = None
     """Keep the tried candidate's depth crop of this size in its record (for a pick log);
     needs the planner's ``depth_image`` input and its camera's intrinsics."""

@@ -8,7 +8,6 @@ Open loop (the paper's; ``PickSettings.recovery`` is ``None``)::
 Closed loop (``recovery`` set; :mod:`.recovery` says what follows a weighing)::
 
     ... APPROACH -> TARE -> DESCEND -> CLOSE -> LIFT -> WEIGH -+-> TRANSFER -> RELEASE -> HOME
-                                                 |             |   (look_from_tray: SETTLE)
                                                  |             +-> RETREAT (nothing came up)
                                                  +-> RETREAT, backing out (fingers closed early)
                         WEIGH again <- SHAKE <-----------------+
@@ -251,9 +250,7 @@ class PickPlanner(ClosedLoop, LeafSystem):
         if s.mode is Mode.RELEASE and elapsed >= settle and s.width < settings.open_width:
             return replace(s, width=settings.open_width)
         if s.mode is Mode.RELEASE and elapsed >= settle + settings.release_time:
-            last = s.loop.deliveries + 1 >= settings.max_picks
-            return self._enter(Mode.SETTLE if settings.look_from_tray and not last
-                               else Mode.HOME, s, t)
+            return self._enter(Mode.HOME, s, t)
         if s.mode is Mode.OPEN and elapsed >= settings.release_time:
             return self._enter(Mode.WEIGH_OPEN, s, t)
         if s.mode in (Mode.TARE, Mode.WEIGH, Mode.WEIGH_OPEN):
