@@ -217,6 +217,7 @@ def test_a_part_that_slides_out_early_in_the_lift_backs_out_the_way_it_came():
     first, second = records
     assert first.disposition is Disposition.EMPTY and first.verdict is Verdict.NONE
     assert "backed out" in first.reason and second.disposition is Disposition.DELIVERED
+    assert first.recoveries == [Recovery.BACK_OUT] and "| backed out, empty |" in first.describe()
     assert times[Mode.RETREAT] - times[Mode.LIFT] == pytest.approx(0.1, abs=0.03)
     assert modes.index(Mode.RETREAT) < modes.index(Mode.WEIGH)  # the first grasp is not weighed
     # The command turns back without a jump: no step larger than the moves' own (~1 rad/s).
@@ -235,6 +236,7 @@ def test_a_part_that_slides_out_past_the_slow_stretch_is_found_at_the_top():
                                    slip_after=0.5)
     first = records[0]
     assert first.disposition is Disposition.EMPTY and "backed out" not in (first.reason or "")
+    assert first.recoveries == []
     assert modes[modes.index(Mode.LIFT) + 1] is Mode.WEIGH
     assert times[Mode.RETREAT] - times[Mode.WEIGH] < 0.05  # closed fingers need no weighing
 

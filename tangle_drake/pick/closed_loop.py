@@ -131,9 +131,10 @@ class ClosedLoop:
                 back_out.value(played), lift.value(played), rtol=0.0, atol=RETRACE_TOLERANCE):
             return s
         record = self._came_up(context, s.record, Verdict.NONE, None)
-        record = with_reason(self._decided(context, record, Disposition.EMPTY),
-                             f"the fingers closed on nothing {played:.2f} s into the lift: "
-                             "backed out the way the pick came")
+        record = with_reason(self._decided(context, replace(
+            record, recoveries=[*record.recoveries, Recovery.BACK_OUT]), Disposition.EMPTY),
+            f"the fingers closed on nothing {played:.2f} s into the lift: backed out the way "
+            "the pick came")
         # RETREAT, playing the back-out from where the lift has got to.
         return replace(s, mode=Mode.RETREAT, since=t - played, trajectory=back_out,
                        record=record, empty_grasps=(*s.empty_grasps, self._empty(record)))

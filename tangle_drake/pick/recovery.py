@@ -34,8 +34,12 @@ class Verdict(enum.Enum):
 
 
 class Recovery(enum.Enum):
-    """A step taken after a weighing that was not "one part"."""
+    """A step taken after a grasp that did not bring up one part, as weighed (or, for
+    ``BACK_OUT``, as the fingers' opening said)."""
 
+    BACK_OUT = "backed out"
+    """The fingers closed on nothing while the lift still retraced the descent: back the way
+    the pick came, unweighed."""
     REWEIGH = "weighed again"
     SHAKE = "shaken"
     PUT_BACK = "lowered to the pile and opened"
