@@ -7,26 +7,27 @@ harmonic rule) and watches the fingers' opening (``gripper.state_measured``, wha
 reads too) every 20 ms from the close to the end of the lift. For each grasp that came up
 empty it prints the opening at the end of the close (past ``empty_width``: the fingers held
 something) and when, in the lift, they closed on nothing; then how many empty grasps held
-something at the close.
+something at the close and lost it in the lift, and how many missed.
 """
 
 from __future__ import annotations
 
 import argparse
 import statistics
-from dataclasses import dataclass, field, replace
+import sys
+from dataclasses import dataclass, field
 
 from tangle_drake.bench.clearing import SIM_TIME_PER_PART, clearing_diagram
-from tangle_drake.bench.methods import MethodRun, parse_method
-from tangle_drake.bench.trials import method_seed, pile_seed
+from tangle_drake.bench.methods import MethodRun
+from tangle_drake.bench.runner import BenchOptions, plan
+from tangle_drake.bench.trials import method_seed, part_scenario, pile_seed
+from tangle_drake.errors import TangleDrakeError
 from tangle_drake.pick.diagram import closed_loop_settings
 from tangle_drake.pick.episode import POLL, PickEpisode
 from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.pick.recovery import Disposition
 from tangle_drake.pile import PileSettler
-from tangle_drake.scenario import PartCount
-from tangle_drake.scenario_files import resolve_scenario
 from tangle_drake.station import build_station
 
 WATCH = 0.02
@@ -77,17 +78,47 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0, help="the benchmark's run seed")
     parser.add_argument("--scenario", default="floating_gripper.yaml")
     args = parser.parse_args()
-    base = resolve_scenario(args.scenario)
-    scenario = replace(base, view_cameras=[], pile=replace(
-        base.pile, parts=[PartCount(args.part, base.pile.total_count)]))
-    pick = clearing_diagram(scenario, [parse_method("harmonic")], args.part)
+    try:
+        watch, records, empty_width = clear(args)
+    except TangleDrakeError as error:
+        sys.exit(f"error: {error}")
+    graspings = [r for r in records if r.disposition is not None]
+    lost_at, missed = [], 0
+    print(f"{args.part} bin {args.trial}: {len(graspings)} grasps; empty width "
+          f"{empty_width * 1e3:.1f} mm")
+    for record, grasp in zip(graspings, watch.grasps, strict=False):
+        if record.disposition is not Disposition.EMPTY or grasp.at_close is None:
+            continue
+        lost = next((t for t, w in grasp.lift if w < empty_width), None)
+        if grasp.at_close < empty_width:
+            missed += 1
+            what = "closed on nothing at the close"
+        elif lost is not None:
+            lost_at.append(lost)
+            what = f"closed on nothing {lost:.2f} s into the lift"
+        else:
+            what = "still holding at the lift's end"
+        print(f"  grasp {record.index}: {grasp.at_close * 1e3:.1f} mm at the close, {what}")
+    empty = sum(r.disposition is Disposition.EMPTY for r in graspings)
+    median = f", median {statistics.median(lost_at):.2f} s into the lift" if lost_at else ""
+    print(f"{empty} empty: {len(lost_at)} held something at the close and lost it in the "
+          f"lift{median}; {missed} missed; {empty - len(lost_at) - missed} lost later")
+
+
+def clear(args: argparse.Namespace) -> tuple[FingerWatch, list[PickRecord], float]:
+    """Clear the benchmark's bin (its scenario and pile, as ``bench --clear`` makes them)
+    with the fingers watched; the watch, the records and the empty width."""
+    config, _, _ = plan(BenchOptions(methods=["harmonic"], parts=[args.part], trials=1,
+                                     seed=args.seed, scenario=args.scenario, clear=True))
+    spec = config.parts[0]
+    scenario = part_scenario(config, spec)
+    pick = clearing_diagram(scenario, config.methods[spec.name], spec.name)
     settled = PileSettler(build_station(scenario), scenario).settle(
-        pile_seed(args.seed, args.part, args.trial))
+        pile_seed(args.seed, spec.name, args.trial))
     episode = PickEpisode(pick)
-    run = MethodRun("harmonic", method_seed(args.seed, args.part, args.trial))
+    run = MethodRun("harmonic", method_seed(args.seed, spec.name, args.trial))
     episode.start(settled.state, lambda context: pick.diagram.GetInputPort("method").FixValue(
         context, run))
-    empty_width = closed_loop_settings(scenario).empty_width
     watch = FingerWatch(episode)
     records: list[PickRecord] = []
 
@@ -96,25 +127,7 @@ def main() -> None:
         watch.ended(record)
 
     episode.run(SIM_TIME_PER_PART * settled.report.num_in_bin, on_pick=ended, step=watch)
-    graspings = [r for r in records if r.disposition is not None]
-    held, lost_at = 0, []
-    print(f"{args.part} bin {args.trial}: {len(graspings)} grasps; empty width "
-          f"{empty_width * 1e3:.1f} mm")
-    for record, grasp in zip(graspings, watch.grasps, strict=False):
-        if record.disposition is not Disposition.EMPTY or grasp.at_close is None:
-            continue
-        lost = next((t for t, w in grasp.lift if w < empty_width), None)
-        held += grasp.at_close >= empty_width
-        if grasp.at_close >= empty_width and lost is not None:
-            lost_at.append(lost)
-        print(f"  grasp {record.index}: {grasp.at_close * 1e3:.1f} mm at the close, "
-              + ("closed on nothing at the close" if grasp.at_close < empty_width else
-                 f"closed on nothing {lost:.2f} s into the lift" if lost is not None else
-                 "still holding at the lift's end"))
-    empty = sum(r.disposition is Disposition.EMPTY for r in graspings)
-    median = f", median {statistics.median(lost_at):.2f} s into the lift" if lost_at else ""
-    print(f"{empty} empty: {held} held something at the close and lost it{median}; "
-          f"{empty - held} missed")
+    return watch, records, closed_loop_settings(scenario).empty_width
 
 
 if __name__ == "__main__":
