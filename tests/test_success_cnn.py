@@ -11,10 +11,12 @@ from cli_run import run_command
 
 from tangle_drake.bench.methods import parse_method
 from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.dataset import load_samples
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.pick.selection import resolve_tangle_choice
+from tangle_drake.tangle_cnn.card import classes_test_header, classes_test_row
 from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
-from tangle_drake.tangle_cnn.evaluate import evaluate_model
+from tangle_drake.tangle_cnn.evaluate import calibration_error, evaluate_model
 from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.objectives import OUTCOME, SUCCESS
 from tangle_drake.tangle_cnn.synthetic import (
@@ -96,7 +98,7 @@ def test_the_outcome_model_tells_one_part_from_a_tangle_from_an_empty_grasp(mode
                           probabilities[:, 0])  # P(one part) is what the rules read
 
 
-def test_evaluation_breaks_a_success_model_down_by_outcome(models, picks):
+def test_evaluation_breaks_a_success_model_down_by_outcome(models, picks, tmp_path):
     result = evaluate_model(load_tangle_model(models["success"]), picks)
     assert result.objective == "success" and result.classes == ("success", "failure")
     by_name = {group.name.split(":")[1].strip(): group for group in result.groups}
@@ -109,6 +111,20 @@ def test_evaluation_breaks_a_success_model_down_by_outcome(models, picks):
     three = evaluate_model(load_tangle_model(models["outcome"]), picks)
     assert three.classes == ("one part", "several parts", "no part")
     assert three.class_accuracy > 0.8 and len(three.class_recall) == 3
+    assert sum(three.class_samples) == three.samples  # its validation piles, balanced
+    fresh = tmp_path / "fresh"
+    write_synthetic_dataset(fresh, 60, seed=4, outcomes=True)
+    three = evaluate_model(load_tangle_model(models["outcome"]), fresh)
+    outcomes = load_samples(fresh, ("outcome",))["outcome"]
+    assert three.class_samples == [int((outcomes == code).sum()) for code in (1, 2, 0)]
+    # The card's row: the classes' shares, recalls and the calibration error, from the figures.
+    error = calibration_error(three.calibration)
+    assert 0 <= error < 0.5
+    row = classes_test_row("u_hook", three.to_dict()).strip("|").split("|")
+    shares = [float(x) for x in row[2].split("/")]
+    assert np.allclose(shares, [100 * n / three.samples for n in three.class_samples], atol=0.05)
+    assert float(row[-1]) == pytest.approx(100 * error, abs=0.05)
+    assert len(classes_test_header(three.classes).splitlines()[0].split("|")) == len(row) + 2
 
 
 def test_each_model_serves_its_rules_and_is_refused_by_the_others(models):

@@ -10,11 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tangle_drake.bench.methods import parse_method
 from tangle_drake.crops import DEFAULT_CROP
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.parts.catalog import BUILTIN_PARTS
 from tangle_drake.pick.selection import TRAINED_DIR, resolve_tangle_choice, trained_model_path
-from tangle_drake.tangle_cnn.card import validation_row
+from tangle_drake.tangle_cnn.card import classes_test_row, validation_row
 from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
 from tangle_drake.tangle_cnn.target_mask import TargetMask
@@ -77,6 +78,24 @@ def test_a_shipped_success_cnn_is_one_that_success_cnn_picks_with_and_the_card_d
     assert validation_row(path) in card
     tested = tool.test_rows(tool.KINDS["success"], part)
     assert tested is not None and tested[0] in card, f"{part}: the success CNN was not tested"
+
+
+@pytest.mark.parametrize("part", BUILTIN_PARTS)
+def test_a_shipped_pick_outcome_model_picks_with_its_rule_and_the_card_describes_it(part):
+    path = trained_model_path(part, "outcome")
+    if not path.is_file():
+        pytest.skip(f"no pick-outcome model is shipped for {part}")
+    model = load_tangle_model(path)
+    assert model.objective.name == "outcome" and model.info["part"] == part
+    assert model.network.config.classes == 3 and model.crop == DEFAULT_CROP
+    assert model.info["data"]["manifest"]["label"] == "pick"
+    assert parse_method(f"model:{path}").rule == "success-harmonic"
+    tool = load_tool()
+    card = (TRAINED_DIR / "README.md").read_text()
+    assert validation_row(path) in card
+    tested = tool.tested(tool.KINDS["outcome"], part)
+    assert tested is not None, f"{part}: the pick-outcome model was not tested"
+    assert classes_test_row(part, tested) in card
 
 
 def test_a_part_file_picks_with_the_model_teach_wrote_beside_it(tmp_path):

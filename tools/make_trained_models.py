@@ -6,10 +6,13 @@ card (``tangle_drake/trained/README.md``).
     python tools/make_trained_models.py --test-only              # test the installed models
     python tools/make_trained_models.py --card-only              # rewrite the card only
     python tools/make_trained_models.py --objective success --parts e_shape --samples 1000
+    python tools/make_trained_models.py --objective outcome --parts e_shape --samples 1000
 
 ``--objective success`` makes the success/failure CNNs instead (``trained/P.success.pt``, the
 seed's second baseline) from physical-pick data: ``collect --label pick`` into
 ``DATA/P_pick`` and ``train --objective success``, tested the same way on ``DATA/P_pick_test``.
+``--objective outcome`` makes the pick-outcome models (``trained/P.outcome.pt``: one part,
+several, none) from the same data.
 
 For each part it runs the project's own commands, so the card's commands reproduce the models:
 
@@ -45,12 +48,15 @@ from tangle_drake.pick.selection import TRAINED_DIR, trained_model_path
 from tangle_drake.tangle_cnn.card import (
     TEST_HEADER,
     VALIDATION_HEADER,
+    classes_test_header,
+    classes_test_row,
     test_header,
     test_row,
     validation_header,
     validation_row,
 )
 from tangle_drake.tangle_cnn.checkpoint import MODEL_KIND, read_checkpoint
+from tangle_drake.tangle_cnn.objectives import OUTCOME
 from tangle_drake.tangle_cnn.train_settings import TRAIN_THREADS
 
 CARD = TRAINED_DIR / "README.md"
@@ -82,7 +88,9 @@ class ModelKind:
 
 
 KINDS = {"tangled": ModelKind("tangled", (), "", "tangled"),
-         "success": ModelKind("success", ("--label", "pick"), "_pick", "failure")}
+         "success": ModelKind("success", ("--label", "pick"), "_pick", "failure"),
+         "outcome": ModelKind("outcome", ("--label", "pick"), "_pick", "not one part")}
+"""The success/failure CNN and the pick-outcome model learn from the same physical picks."""
 
 
 def run_command(*argv: str, env: dict[str, str] | None = None) -> None:
@@ -134,8 +142,8 @@ def test_model(kind: ModelKind, part: str, samples: int, data: Path, work: Path,
     print(f"wrote {kind.test_record(part)}", flush=True)
 
 
-def test_rows(kind: ModelKind, part: str) -> tuple[str, dict[str, str]] | None:
-    """The card's test row of ``part`` and its right-% by cause, if its model was tested."""
+def tested(kind: ModelKind, part: str) -> dict | None:
+    """The evaluation of ``part``'s installed model on its test piles, if it was tested."""
     path, model = kind.test_record(part), kind.model(part)
     if not path.is_file():
         return None
@@ -143,7 +151,13 @@ def test_rows(kind: ModelKind, part: str) -> tuple[str, dict[str, str]] | None:
     if record.get("weights_sha256") != weights_sha256(model):
         raise TangleDrakeError(f"{path} tested another {model}; run --test-only --parts {part}"
                                f" --objective {kind.objective}")
-    return test_row(part, record["evaluation"])
+    return record["evaluation"]
+
+
+def test_rows(kind: ModelKind, part: str) -> tuple[str, dict[str, str]] | None:
+    """The card's test row of ``part`` and its right-% by cause, if its model was tested."""
+    evaluation = tested(kind, part)
+    return None if evaluation is None else test_row(part, evaluation)
 
 
 def write_card(parts: list[str]) -> None:
@@ -154,10 +168,11 @@ def write_card(parts: list[str]) -> None:
     if not shipped:
         raise TangleDrakeError(f"no trained models in {TRAINED_DIR} to describe")
     rows = [validation_row(tangled.model(part)) for part in shipped]
-    tested = {part: found for part in shipped if (found := test_rows(tangled, part))}
+    tested_rows = {part: found for part in shipped if (found := test_rows(tangled, part))}
     CARD.write_text(CARD_TEMPLATE.format(header=VALIDATION_HEADER, rows="\n".join(rows),
-                                         test=test_section(tested),
-                                         success=success_section(parts)))
+                                         test=test_section(tested_rows),
+                                         success=success_section(parts),
+                                         outcome=outcome_section(parts)))
     print(f"wrote {CARD}")
 
 
@@ -173,6 +188,20 @@ def success_section(parts: list[str]) -> str:
     if tested:
         lines += [SUCCESS_TEST, "", test_header(kind.failure), *tested, ""]
     return "\n".join([*lines, SUCCESS_HOW])
+
+
+def outcome_section(parts: list[str]) -> str:
+    """The card's section on the shipped pick-outcome models (none: a line saying so)."""
+    kind = KINDS["outcome"]
+    shipped = [part for part in parts if kind.model(part).is_file()]
+    if not shipped:
+        return "No pick-outcome model is shipped yet."
+    rows = [classes_test_row(part, found) for part in shipped if (found := tested(kind, part))]
+    lines = [OUTCOME_INTRO, "", validation_header(kind.failure),
+             *(validation_row(kind.model(part)) for part in shipped), ""]
+    if rows:
+        lines += [OUTCOME_TEST, "", classes_test_header(OUTCOME.classes), *rows, ""]
+    return "\n".join([*lines, OUTCOME_HOW])
 
 
 def test_section(tested: dict[str, tuple[str, dict[str, str]]]) -> str:
@@ -219,6 +248,35 @@ tangle-drake evaluate --data data/PART_pick_test --model tangle_drake/trained/PA
 """
 
 
+OUTCOME_INTRO = """\
+Beyond the paper: the same network and crop, trained with `train --objective outcome` on the
+same physical picks as the success/failure CNN, with three classes: one part, several parts,
+no part. So it tells a tangle from an empty grasp. Its P(one part) serves the same rules as
+the success/failure CNN; `bench --methods model:tangle_drake/trained/PART.outcome.pt` picks
+with the harmonic mean of it and graspability (`success-harmonic`). The validation columns
+score P(one part) against the other two classes.\
+"""
+
+OUTCOME_TEST = """\
+Test on the success/failure CNN's test picks (piles of another collection seed): the share of
+each class, how often the most probable class was the true one, each class's recall, and how
+well P(one part) is calibrated (the sample-weighted mean gap between predicted and observed
+over ten bins of it):\
+"""
+
+OUTCOME_HOW = """
+```bash
+OMP_NUM_THREADS=1 tangle-drake train --data data/PART_pick --objective outcome \\
+    --out out/trained/PART.outcome.pt --seed 0
+cp out/trained/PART.outcome.pt tangle_drake/trained/PART.outcome.pt
+tangle-drake evaluate --data data/PART_pick_test --model tangle_drake/trained/PART.outcome.pt
+```
+
+on the success/failure CNN's data (`python tools/make_trained_models.py --objective outcome
+--parts PART --samples N --test-samples T` runs them).\
+"""
+
+
 TEST_BY_CAUSE = """\
 Right % (samples) by how the label came about, on the same test piles. The last row holds
 lifts of one part during which another rose 1 cm or more, but less than the 3 cm that makes
@@ -258,6 +316,10 @@ the validation accuracy):
 ## Success/failure models
 
 {success}
+
+## Pick-outcome models
+
+{outcome}
 
 ## How they were made
 
@@ -353,7 +415,8 @@ def main() -> int:
                         help="samples per part of the test piles (default 1000)")
     parser.add_argument("--objective", choices=list(KINDS), default="tangled",
                         help="tangled (default): the tangle CNNs, from auto-lift data; success: "
-                             "the success/failure CNNs, from physical-pick data")
+                             "the success/failure CNNs, from physical-pick data; outcome: the "
+                             "pick-outcome models (one part / several / none), from the same")
     parser.add_argument("--card-only", action="store_true",
                         help="only rewrite the model card from the installed models")
     parser.add_argument("--test-only", action="store_true",

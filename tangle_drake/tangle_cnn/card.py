@@ -8,6 +8,7 @@ from pathlib import Path
 
 from tangle_drake.bench.stats import wilson
 from tangle_drake.tangle_cnn.checkpoint import MODEL_KIND, read_checkpoint
+from tangle_drake.tangle_cnn.evaluate import calibration_error
 
 
 def validation_header(failure: str = "tangled") -> str:
@@ -65,3 +66,24 @@ def test_row(part: str, result: dict) -> tuple[str, dict[str, str]]:
     causes = {group["name"]: f"{pct(group['correct'] / group['samples'])} ({group['samples']})"
               if group["samples"] else "-" for group in result["groups"]}
     return row, causes
+
+
+def classes_test_header(classes: tuple[str, ...]) -> str:
+    """:func:`classes_test_row`'s header, for a model of three classes or more (``classes``:
+    the good one first)."""
+    names = " / ".join(classes)
+    return (f"| part | test samples | {names} % | piles | most probable class right % "
+            f"| recall % ({names}) | ROC-AUC of P({classes[0]}) "
+            f"| calibration error of P({classes[0]}), points |\n" + "|---" * 8 + "|")
+
+
+def classes_test_row(part: str, result: dict) -> str:
+    """One row of :func:`classes_test_header` from an evaluation (``Evaluation.to_dict()``)
+    of a model of three classes or more."""
+    shares = " / ".join(f"{100 * n / result['samples']:.1f}" for n in result["class_samples"])
+    recalls = " / ".join(pct(r) for r in result["class_recall"])
+    auc = "n/a" if result["auc"] is None else f"{result['auc']:.3f}"
+    error = calibration_error(result["calibration"])
+    return (f"| {part} | {result['samples']} | {shares} | {result['piles']} "
+            f"| {pct(result['class_accuracy'])} | {recalls} | {auc} "
+            f"| {'n/a' if error is None else f'{100 * error:.1f}'} |")

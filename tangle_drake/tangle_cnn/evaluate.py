@@ -73,6 +73,16 @@ def calibration(p_good: np.ndarray, good: np.ndarray,
                  for k in range(bins) if (which == k).any())
 
 
+def calibration_error(bins: tuple[Bin, ...] | list[dict]) -> float | None:
+    """The expected calibration error of a reliability table (:func:`calibration`'s bins, or
+    their dicts): the sample-weighted mean gap between predicted and observed, 0-1."""
+    rows = [b if isinstance(b, dict) else asdict(b) for b in bins]
+    total = sum(b["samples"] for b in rows)
+    if not total:
+        return None
+    return sum(b["samples"] * abs(b["mean_predicted"] - b["observed"]) for b in rows) / total
+
+
 @dataclass(frozen=True)
 class Evaluation:
     """A model's figures on a dataset (``scope`` says which of its samples were scored)."""
@@ -103,7 +113,9 @@ class Evaluation:
     class_accuracy: float | None = None
     """With three classes or more: how often the most probable class is the true one..."""
     class_recall: list | None = None
-    """...and each class's recall (``None`` for a class the samples lack)."""
+    """...and each class's recall (``None`` for a class the samples lack)..."""
+    class_samples: list | None = None
+    """...and how many samples each class holds."""
     calibration: tuple[Bin, ...] = ()
     """How well P(class 0) is calibrated: the samples in ten bins of it, each with its mean
     prediction and how often class 0 was the truth."""
@@ -159,6 +171,8 @@ def evaluate_model(model: TangleModel, directory: Path,
                 _groups(samples, manifest, rows, truth, p_tangled)),
         objective=objective.name, classes=objective.classes,
         class_accuracy=several.get("class_accuracy"), class_recall=several.get("class_recall"),
+        class_samples=([int((classes == k).sum()) for k in range(len(objective.classes))]
+                       if several else None),
         calibration=calibration(1.0 - p_tangled, truth == 0))
 
 
