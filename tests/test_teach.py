@@ -143,6 +143,23 @@ def test_the_command_refuses_a_bad_mesh_with_its_reason(meshes, tmp_path, capsys
     assert "encloses no volume" in (tmp_path / "sheet" / "check.txt").read_text()
 
 
+def test_the_command_takes_the_label_and_test_counts(tmp_path, monkeypatch):
+    for option in ("--samples", "--test-samples"):
+        with pytest.raises(TangleDrakeError, match=f"{option} must be at least 1, got 0"):
+            run_command("teach", "c_ring", option, "0", "--out", str(tmp_path / "none"))
+
+    def stop_after_check(stage: str) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(pipeline, "AFTER_STAGE", stop_after_check)
+    out = tmp_path / "ring"
+    assert run_command("teach", "c_ring", "--samples", "120", "--test-samples", "1000",
+                       "--out", str(out)) == 130
+    identity = json.loads((out / pipeline.STATE_FILE).read_text())["identity"]
+    assert (identity["samples"], identity["test_samples"]) == (120, 1000)
+    assert identity["bench_trials"] == TeachSettings("c_ring").bench_trials  # the rest default
+
+
 def test_the_check_of_a_built_in_part_reads_its_wire():
     check = check_part("u_hook", 1.0, SCENARIO)
     assert check.accepted and check.mass_from == "wire" and check.watertight

@@ -1,5 +1,5 @@
-"""Make the shipped models: collect, train and install one per built-in part, with the model
-card (``tangle_drake/trained/README.md``).
+"""Make the shipped models: one per built-in part, installed with the model card
+(``tangle_drake/trained/README.md``).
 
     python tools/make_trained_models.py                          # every built-in part
     python tools/make_trained_models.py --parts u_hook --samples 5100
@@ -8,26 +8,34 @@ card (``tangle_drake/trained/README.md``).
     python tools/make_trained_models.py --objective success --parts e_shape --samples 1000
     python tools/make_trained_models.py --objective outcome --parts e_shape --samples 1000
 
+A tangle CNN is made the one way a user makes a model for their own part, with ``teach``:
+
+    tangle-drake teach P --samples N --test-samples T --out WORK/P --workers W
+
+(its labels are ``collect --part P --seed 0``'s and its training ``train --seed 0``'s on one
+torch thread, ``tests/test_teach.py``), then ``WORK/P/model.pt`` is copied to
+``tangle_drake/trained/P.pt`` and its test on ``T`` labels from piles of seed 1
+(``WORK/P/test.json``) is kept, with the SHA-256 of the model's weights, in
+``tangle_drake/trained/P.test.json`` for the card. ``teach`` also benchmarks it against
+graspability alone on 20 paired piles (``WORK/P/bench``).
+
 ``--objective success`` makes the success/failure CNNs instead (``trained/P.success.pt``, the
-seed's second baseline) from physical-pick data: ``collect --label pick`` into
-``DATA/P_pick`` and ``train --objective success``, tested the same way on ``DATA/P_pick_test``.
+seed's second baseline) from physical-pick data, which ``teach`` does not collect:
+
+    tangle-drake collect --label pick --part P --samples N --out DATA/P_pick --seed 0 --workers W
+    OMP_NUM_THREADS=1 tangle-drake train --data DATA/P_pick --objective success \
+        --out WORK/P.success.pt --seed 0
+
+installed as ``trained/P.success.pt`` and tested on the picks of seed 1:
+
+    tangle-drake collect --label pick --part P --samples T --out DATA/P_pick_test --seed 1
+    tangle-drake evaluate --data DATA/P_pick_test --model tangle_drake/trained/P.success.pt
+
 ``--objective outcome`` makes the pick-outcome models (``trained/P.outcome.pt``: one part,
-several, none) from the same data.
-
-For each part it runs the project's own commands, so the card's commands reproduce the models:
-
-    tangle-drake collect --part P --samples N --out DATA/P --seed 0 --workers W
-    OMP_NUM_THREADS=1 tangle-drake train --data DATA/P --out WORK/P.pt --seed 0
-
-then copies ``WORK/P.pt`` (weights and the configuration that made them; not the training
-state) to ``tangle_drake/trained/P.pt``, and tests it on piles of another seed:
-
-    tangle-drake collect --part P --samples T --out DATA/P_test --seed 1 --workers W
-    tangle-drake evaluate --data DATA/P_test --model tangle_drake/trained/P.pt --json F
-
-keeping the figures, with the SHA-256 of the model's weights, in
-``tangle_drake/trained/P.test.json`` for the card. Every command resumes, so an interrupted run
-loses little: run the same command again. A dataset that already holds ``N`` samples is used as is.
+several, none) the same way from the same data. ``--test-only`` tests installed models the
+second way (a tangle CNN on ``DATA/P_test``, auto-lift labels of seed 1). Every command
+resumes, so an interrupted run loses little: run the same command again. A dataset that already
+holds ``N`` samples is used as is.
 """
 
 from __future__ import annotations
@@ -104,7 +112,8 @@ def run_command(*argv: str, env: dict[str, str] | None = None) -> None:
 
 def make_model(kind: ModelKind, part: str, samples: int, data: Path, work: Path,
                workers: int) -> None:
-    """Collect (or extend) the part's data, train on all of it, install the checkpoint."""
+    """Collect (or extend) the part's physical picks, train on all of them, install the
+    checkpoint."""
     dataset = data / f"{part}{kind.data_suffix}"
     run_command("collect", *kind.collect, "--part", part, "--samples", str(samples), "--out",
                 str(dataset), "--seed", "0", "--workers", str(workers))
@@ -114,6 +123,19 @@ def make_model(kind: ModelKind, part: str, samples: int, data: Path, work: Path,
     TRAINED_DIR.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(checkpoint, kind.model(part))
     print(f"installed {kind.model(part)}", flush=True)
+
+
+def teach_model(part: str, samples: int, test_samples: int, work: Path, workers: int) -> None:
+    """``teach`` the part (labels, training, test, benchmark), install its model and keep its
+    test for the card."""
+    kind = KINDS["tangled"]
+    out = work / part
+    run_command("teach", part, "--samples", str(samples), "--test-samples", str(test_samples),
+                "--out", str(out), "--workers", str(workers))
+    TRAINED_DIR.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(out / "model.pt", kind.model(part))
+    print(f"installed {kind.model(part)}", flush=True)
+    write_test_record(kind, part, json.loads((out / "test.json").read_text()))
 
 
 def weights_sha256(path: Path) -> str:
@@ -136,8 +158,14 @@ def test_model(kind: ModelKind, part: str, samples: int, data: Path, work: Path,
     figures = work / kind.test_record(part).name
     run_command("evaluate", "--data", str(test_data), "--model", str(model), "--json",
                 str(figures), env={"OMP_NUM_THREADS": str(TRAIN_THREADS)})
-    record = {"weights_sha256": weights_sha256(model), "seed": TEST_SEED,
-              "evaluation": json.loads(figures.read_text())}
+    write_test_record(kind, part, json.loads(figures.read_text()))
+
+
+def write_test_record(kind: ModelKind, part: str, evaluation: dict) -> None:
+    """Keep the installed model's test figures (piles of :data:`TEST_SEED`) for the card,
+    with the digest of the weights they are of."""
+    record = {"weights_sha256": weights_sha256(kind.model(part)), "seed": TEST_SEED,
+              "evaluation": evaluation}
     kind.test_record(part).write_text(json.dumps(record, indent=1) + "\n")
     print(f"wrote {kind.test_record(part)}", flush=True)
 
@@ -323,16 +351,19 @@ the validation accuracy):
 
 ## How they were made
 
+The one way a user makes a model for their own part:
+
 ```bash
-tangle-drake collect --part PART --samples N --out data/PART --seed 0 --workers 2
-OMP_NUM_THREADS=1 tangle-drake train --data data/PART --out out/trained/PART.pt --seed 0
-cp out/trained/PART.pt tangle_drake/trained/PART.pt
-tangle-drake collect --part PART --samples 1000 --out data/PART_test --seed 1 --workers 2
-tangle-drake evaluate --data data/PART_test --model tangle_drake/trained/PART.pt
+tangle-drake teach PART --samples N --test-samples 1000 --out out/trained/PART --workers 2
+cp out/trained/PART/model.pt tangle_drake/trained/PART.pt
 ```
 
 with N the samples in the table (`python tools/make_trained_models.py --parts PART
---samples N` runs all five). The same seed gives the same dataset (the first piles of the
+--samples N` runs it and writes this card). `teach` collects the labels of `tangle-drake
+collect --part PART --seed 0`, trains as `OMP_NUM_THREADS=1 tangle-drake train --seed 0` does
+on them (`tests/test_teach.py` checks both), tests on labels from piles of seed 1 (the table
+above) and benchmarks the model against graspability alone on 20 paired piles
+(`out/trained/PART/bench`). The same seed gives the same dataset (the first piles of the
 seed's sequence) and, on the CPU with the same number of torch threads, the same weights.
 
 ## Limits
@@ -407,9 +438,11 @@ def main() -> int:
                         choices=list(BUILTIN_PARTS))
     parser.add_argument("--samples", type=int, default=4000,
                         help="samples per part to collect (default 4000)")
-    parser.add_argument("--data", type=Path, default=Path("data"), help="dataset root")
+    parser.add_argument("--data", type=Path, default=Path("data"),
+                        help="dataset root (physical picks; a tangle CNN's data is in its "
+                             "teach run)")
     parser.add_argument("--work", type=Path, default=Path("out/trained"),
-                        help="where training writes its checkpoints, state and logs")
+                        help="where the teach runs and the trainings write")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--test-samples", type=int, default=1000,
                         help="samples per part of the test piles (default 1000)")
@@ -424,9 +457,13 @@ def main() -> int:
     args = parser.parse_args()
     kind = KINDS[args.objective]
     for part in [] if args.card_only else args.parts:
-        if not args.test_only:
+        if args.test_only:
+            test_model(kind, part, args.test_samples, args.data, args.work, args.workers)
+        elif kind.objective == "tangled":
+            teach_model(part, args.samples, args.test_samples, args.work, args.workers)
+        else:
             make_model(kind, part, args.samples, args.data, args.work, args.workers)
-        test_model(kind, part, args.test_samples, args.data, args.work, args.workers)
+            test_model(kind, part, args.test_samples, args.data, args.work, args.workers)
     write_card(list(BUILTIN_PARTS))
     return 0
 
