@@ -10,8 +10,9 @@ the same seed would have made them) up to N samples become a dataset of their ow
 whole dataset is the last point. Each model is scored on every sample of ``--test``: ROC-AUC
 and accuracy, and the paired difference of its ROC-AUC from the whole dataset's model with a
 95 % bootstrap interval over the test piles (the same samples score both models, so the
-interval is much narrower than either AUC's own). Training resumes where it stopped; a
-finished model is not trained again. ``curve.json`` in ``--out`` keeps the figures.
+interval is much narrower than either AUC's own). ``--against MODEL`` (e.g. the part's shipped
+model) adds each model's paired difference from that one too. Training resumes where it
+stopped; a finished model is not trained again. ``curve.json`` in ``--out`` keeps the figures.
 """
 
 from __future__ import annotations
@@ -85,6 +86,8 @@ def main() -> None:
                         help="samples of each smaller training set")
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--seed", type=int, default=0, help="training seed (default 0)")
+    parser.add_argument("--against", type=Path, default=None,
+                        help="also compare every model with this one (e.g. the shipped model)")
     args = parser.parse_args()
     torch.set_num_threads(TRAIN_THREADS)
     points = []
@@ -108,21 +111,38 @@ def main() -> None:
         metrics = binary_metrics(truth, p)
         point["auc"], point["accuracy"] = metrics["auc"], metrics["accuracy"]
     full = points[-1]
+    against = None
+    if args.against is not None:
+        p = p_tangled(args.against, test)
+        against = {"model": str(args.against), "auc": binary_metrics(truth, p)["auc"],
+                   "p_tangled": p}
     print(f"test: {len(truth)} samples from {len(np.unique(piles))} piles of {args.test}")
-    print("| training samples | ROC-AUC | accuracy | ROC-AUC - whole set's [95 % CI] | "
-          "training s |\n|---|---|---|---|---|")
+    extra = "" if against is None else f" ROC-AUC - {args.against.name}'s [95 % CI] |"
+    print(f"| training samples | ROC-AUC | accuracy | ROC-AUC - whole set's [95 % CI] |{extra} "
+          f"training s |\n|---|---|---|---|{'---|' if against else ''}---|")
     for point in points:
-        interval = paired_auc_interval(truth, piles, point["p_tangled"], full["p_tangled"])
-        point["auc_difference"] = point["auc"] - full["auc"]
-        point["auc_difference_ci"] = interval
+        cells = [difference(point, full, "auc_difference", truth, piles)]
+        if against is not None:
+            cells.append(difference(point, against, "auc_vs_against", truth, piles))
         print(f"| {point['samples']} | {point['auc']:.3f} | {100 * point['accuracy']:.1f} % | "
-              f"{point['auc_difference']:+.3f} [{interval[0]:+.3f}, {interval[1]:+.3f}] | "
-              f"{'–' if point['train_s'] is None else round(point['train_s'])} |")
+              + " | ".join(cells) +
+              f" | {'–' if point['train_s'] is None else round(point['train_s'])} |")
     for point in points:
         del point["p_tangled"]
+    if against is not None:
+        del against["p_tangled"]
     (args.out / "curve.json").write_text(json.dumps(
         {"data": str(args.data), "test": str(args.test), "test_samples": len(truth),
-         "points": points}, indent=1) + "\n")
+         "points": points, **({"against": against} if against else {})}, indent=1) + "\n")
+
+
+def difference(point: dict, other: dict, key: str, truth: np.ndarray,
+               piles: np.ndarray) -> str:
+    """Record in ``point`` its ROC-AUC minus ``other``'s (``key``) with the paired interval
+    (``key`` + ``_ci``); the table cell."""
+    interval = paired_auc_interval(truth, piles, point["p_tangled"], other["p_tangled"])
+    point[key], point[f"{key}_ci"] = point["auc"] - other["auc"], interval
+    return f"{point[key]:+.3f} [{interval[0]:+.3f}, {interval[1]:+.3f}]"
 
 
 if __name__ == "__main__":
