@@ -18,6 +18,7 @@ from tangle_drake.pick.selection import TRAINED_DIR, resolve_tangle_choice, trai
 from tangle_drake.tangle_cnn.card import classes_test_row, validation_row
 from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
+from tangle_drake.tangle_cnn.objectives import DEFAULT_RULES
 from tangle_drake.tangle_cnn.target_mask import TargetMask
 
 TOOL = Path(__file__).resolve().parent.parent / "tools" / "make_trained_models.py"
@@ -63,39 +64,31 @@ def test_the_model_card_says_what_the_shipped_files_hold():
         assert tested[0] in card, part
 
 
+@pytest.mark.parametrize("objective", ["success", "outcome"])
 @pytest.mark.parametrize("part", BUILTIN_PARTS)
-def test_a_shipped_success_cnn_is_one_that_success_cnn_picks_with_and_the_card_describes(part):
-    path = trained_model_path(part, "success")
+def test_a_shipped_physical_pick_model_picks_with_its_rule_and_the_card_describes_it(part,
+                                                                                   objective):
+    """The success/failure CNN (the seed's baseline) and the pick-outcome model, where
+    shipped: learnt from physical picks, picked with by their rules, tested on the card."""
+    path = trained_model_path(part, objective)
     if not path.is_file():
-        pytest.skip(f"no success/failure CNN is shipped for {part}")
+        pytest.skip(f"no {objective} model is shipped for {part}")
     model = load_tangle_model(path)
-    assert model.objective.name == "success" and model.info["part"] == part
+    assert model.objective.name == objective and model.info["part"] == part
+    assert model.network.config.classes == {"success": 2, "outcome": 3}[objective]
     assert model.crop == DEFAULT_CROP
     assert model.info["data"]["manifest"]["label"] == "pick"  # learnt from physical picks
-    assert resolve_tangle_choice(part, "success-cnn").model == path
+    if objective == "success":
+        assert resolve_tangle_choice(part, "success-cnn").model == path
+    assert parse_method(f"model:{path}").rule == DEFAULT_RULES[objective]
     tool = load_tool()
     card = (TRAINED_DIR / "README.md").read_text()
     assert validation_row(path) in card
-    tested = tool.test_rows(tool.KINDS["success"], part)
-    assert tested is not None and tested[0] in card, f"{part}: the success CNN was not tested"
-
-
-@pytest.mark.parametrize("part", BUILTIN_PARTS)
-def test_a_shipped_pick_outcome_model_picks_with_its_rule_and_the_card_describes_it(part):
-    path = trained_model_path(part, "outcome")
-    if not path.is_file():
-        pytest.skip(f"no pick-outcome model is shipped for {part}")
-    model = load_tangle_model(path)
-    assert model.objective.name == "outcome" and model.info["part"] == part
-    assert model.network.config.classes == 3 and model.crop == DEFAULT_CROP
-    assert model.info["data"]["manifest"]["label"] == "pick"
-    assert parse_method(f"model:{path}").rule == "success-harmonic"
-    tool = load_tool()
-    card = (TRAINED_DIR / "README.md").read_text()
-    assert validation_row(path) in card
-    tested = tool.tested(tool.KINDS["outcome"], part)
-    assert tested is not None, f"{part}: the pick-outcome model was not tested"
-    assert classes_test_row(part, tested) in card
+    tested = tool.tested(tool.KINDS[objective], part)
+    assert tested is not None, f"{part}: the {objective} model was not tested"
+    row = (tool.test_rows(tool.KINDS[objective], part)[0] if objective == "success"
+           else classes_test_row(part, tested))
+    assert row in card
 
 
 def test_a_part_file_picks_with_the_model_teach_wrote_beside_it(tmp_path):
