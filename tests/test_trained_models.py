@@ -15,7 +15,7 @@ from tangle_drake.crops import DEFAULT_CROP
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.parts.catalog import BUILTIN_PARTS
 from tangle_drake.pick.selection import TRAINED_DIR, resolve_tangle_choice, trained_model_path
-from tangle_drake.tangle_cnn.card import classes_test_row, validation_row
+from tangle_drake.tangle_cnn.card import validation_row
 from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
 from tangle_drake.tangle_cnn.objectives import DEFAULT_RULES
@@ -86,9 +86,7 @@ def test_a_shipped_physical_pick_model_picks_with_its_rule_and_the_card_describe
     assert validation_row(path) in card
     tested = tool.tested(tool.KINDS[objective], part)
     assert tested is not None, f"{part}: the {objective} model was not tested"
-    row = (tool.test_rows(tool.KINDS[objective], part)[0] if objective == "success"
-           else classes_test_row(part, tested))
-    assert row in card
+    assert tool.card_test_row(tool.KINDS[objective], part, tested) in card
 
 
 def test_a_part_file_picks_with_the_model_teach_wrote_beside_it(tmp_path):

@@ -64,7 +64,7 @@ from tangle_drake.tangle_cnn.card import (
     validation_row,
 )
 from tangle_drake.tangle_cnn.checkpoint import MODEL_KIND, read_checkpoint
-from tangle_drake.tangle_cnn.objectives import OUTCOME
+from tangle_drake.tangle_cnn.objectives import objective_named
 from tangle_drake.tangle_cnn.train_settings import TRAIN_THREADS
 
 CARD = TRAINED_DIR / "README.md"
@@ -199,37 +199,40 @@ def write_card(parts: list[str]) -> None:
     tested_rows = {part: found for part in shipped if (found := test_rows(tangled, part))}
     CARD.write_text(CARD_TEMPLATE.format(header=VALIDATION_HEADER, rows="\n".join(rows),
                                          test=test_section(tested_rows),
-                                         success=success_section(parts),
-                                         outcome=outcome_section(parts)))
+                                         success=pick_model_section("success", parts),
+                                         outcome=pick_model_section("outcome", parts)))
     print(f"wrote {CARD}")
 
 
-def success_section(parts: list[str]) -> str:
-    """The card's section on the shipped success/failure CNNs (none: a line saying so)."""
-    kind = KINDS["success"]
-    shipped = [part for part in parts if kind.model(part).is_file()]
-    if not shipped:
-        return "No success/failure CNN is shipped yet."
-    tested = [found[0] for part in shipped if (found := test_rows(kind, part))]
-    lines = [SUCCESS_INTRO, "", validation_header(kind.failure),
-             *(validation_row(kind.model(part)) for part in shipped), ""]
-    if tested:
-        lines += [SUCCESS_TEST, "", test_header(kind.failure), *tested, ""]
-    return "\n".join([*lines, SUCCESS_HOW])
+def card_test_row(kind: ModelKind, part: str, evaluation: dict) -> str:
+    """The card's test row of ``part``'s model of ``kind`` from its evaluation: a two-class
+    model's figures, or a model of more classes' shares and recalls of each."""
+    if len(objective_named(kind.objective).classes) > 2:
+        return classes_test_row(part, evaluation)
+    return test_row(part, evaluation)[0]
 
 
-def outcome_section(parts: list[str]) -> str:
-    """The card's section on the shipped pick-outcome models (none: a line saying so)."""
-    kind = KINDS["outcome"]
+def card_test_header(kind: ModelKind) -> str:
+    """The header of :func:`card_test_row`'s table."""
+    classes = objective_named(kind.objective).classes
+    return classes_test_header(classes) if len(classes) > 2 else test_header(kind.failure)
+
+
+def pick_model_section(objective: str, parts: list[str]) -> str:
+    """The card's section on the shipped models learnt from physical picks (``success`` or
+    ``outcome``; none shipped: a line saying so)."""
+    kind = KINDS[objective]
+    none, intro, test, how = PICK_MODEL_TEXTS[objective]
     shipped = [part for part in parts if kind.model(part).is_file()]
     if not shipped:
-        return "No pick-outcome model is shipped yet."
-    rows = [classes_test_row(part, found) for part in shipped if (found := tested(kind, part))]
-    lines = [OUTCOME_INTRO, "", validation_header(kind.failure),
+        return none
+    rows = [card_test_row(kind, part, found) for part in shipped
+            if (found := tested(kind, part))]
+    lines = [intro, "", validation_header(kind.failure),
              *(validation_row(kind.model(part)) for part in shipped), ""]
     if rows:
-        lines += [OUTCOME_TEST, "", classes_test_header(OUTCOME.classes), *rows, ""]
-    return "\n".join([*lines, OUTCOME_HOW])
+        lines += [test, "", card_test_header(kind), *rows, ""]
+    return "\n".join([*lines, how])
 
 
 def test_section(tested: dict[str, tuple[str, dict[str, str]]]) -> str:
@@ -303,6 +306,14 @@ tangle-drake evaluate --data data/PART_pick_test --model tangle_drake/trained/PA
 on the success/failure CNN's data (`python tools/make_trained_models.py --objective outcome
 --parts PART --samples N --test-samples T` runs them).\
 """
+
+PICK_MODEL_TEXTS = {
+    "success": ("No success/failure CNN is shipped yet.", SUCCESS_INTRO, SUCCESS_TEST,
+                SUCCESS_HOW),
+    "outcome": ("No pick-outcome model is shipped yet.", OUTCOME_INTRO, OUTCOME_TEST,
+                OUTCOME_HOW)}
+"""Per physical-pick objective: the card section's line when none is shipped, its intro, the
+words before its test table, and how the models are made."""
 
 
 TEST_BY_CAUSE = """\
