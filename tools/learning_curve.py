@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
+import sys
 import time
 from pathlib import Path
 
@@ -27,6 +28,7 @@ import numpy as np
 import torch
 
 from tangle_drake.dataset import MANIFEST, finished_tasks, load_samples, read_shard, shard_name
+from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.evaluate import class_probabilities
 from tangle_drake.tangle_cnn.metrics import binary_metrics, roc_auc
 from tangle_drake.tangle_cnn.model import load_tangle_model
@@ -89,6 +91,24 @@ def main() -> None:
     parser.add_argument("--against", type=Path, default=None,
                         help="also compare every model with this one (e.g. the shipped model)")
     args = parser.parse_args()
+    try:
+        check_inputs(args)
+        run(args)
+    except TangleDrakeError as error:
+        sys.exit(f"error: {error}")
+
+
+def check_inputs(args: argparse.Namespace) -> None:
+    """Refuse a missing dataset or comparison model before any training."""
+    for option, directory in (("--data", args.data), ("--test", args.test)):
+        if not (directory / MANIFEST).is_file():
+            raise TangleDrakeError(f"{option} {directory}: no dataset there (no {MANIFEST})")
+    if args.against is not None:
+        load_tangle_model(args.against)
+
+
+def run(args: argparse.Namespace) -> None:
+    """Train the models of every size (those not trained before) and score them."""
     torch.set_num_threads(TRAIN_THREADS)
     points = []
     for size in [*sorted(args.sizes), None]:
