@@ -147,6 +147,16 @@ def test_each_model_serves_its_rules_and_is_refused_by_the_others(models):
     assert parse_method(f"model:{tangled}").rule == "harmonic"
     assert parse_method(f"model:{models['outcome']}").rule == "success-harmonic"
     assert resolve_tangle_choice("u_hook", model=success).rule == "success-cnn"
+    # RULE:PATH names the rule: an outcome model's P(one part) alone, or a refusal.
+    alone = parse_method(f"success-cnn:{models['outcome']}")
+    assert (alone.rule, alone.model) == ("success-cnn", Path(models["outcome"]).resolve())
+    assert alone.name != parse_method("success-cnn").name
+    with pytest.raises(TangleDrakeError, match=r"the harmonic rule needs a model of P\(not"):
+        parse_method(f"harmonic:{models['outcome']}")
+    with pytest.raises(TangleDrakeError, match="model file not found"):
+        parse_method(f"success-cnn:{models['outcome']}.missing")
+    with pytest.raises(TangleDrakeError, match="unknown method 'random:"):
+        parse_method(f"random:{models['outcome']}")
 
 
 def test_a_success_cnn_needs_outcomes_in_its_data(lifts, tmp_path):

@@ -10,6 +10,7 @@ method               the candidate tried first
 ``harmonic``        the paper's harmonic mean of the two, with the part's tangle CNN
 ``model:PATH``      the harmonic mean with the checkpoint at PATH (any part of the run); a
                     success/failure checkpoint ranks by its P(success) instead
+``RULE:PATH``       a rule that reads a model, with the checkpoint at PATH (one it serves)
 ``success-cnn``     the seed's second baseline (Matsumura et al. 2018): the highest P(success)
                     from the part's success/failure CNN, ``trained/<part>.success.pt``
 ``success-harmonic`` the harmonic mean of graspability and that P(success) (a pick-outcome
@@ -45,8 +46,9 @@ from tangle_drake.graspability.roi import bin_roi
 from tangle_drake.pick.selection import default_rule, trained_model_path
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import camera_model
-from tangle_drake.tangle_cnn.objectives import rule_objective
+from tangle_drake.tangle_cnn.objectives import check_serves, checkpoint_objective, rule_objective
 from tangle_drake.tangle_cnn.selection import (
+    MODEL_RULES,
     RULES,
     ScoredCandidate,
     needs_emap,
@@ -87,15 +89,23 @@ class Method:
 
 
 def parse_method(text: str) -> Method:
-    """A rule's name, or ``model:PATH`` (the rule the checkpoint's objective picks with)."""
-    if text.startswith(MODEL_PREFIX):
-        path = Path(text[len(MODEL_PREFIX):]).expanduser()
+    """A rule's name, ``model:PATH`` (the rule the checkpoint's objective picks with), or
+    ``RULE:PATH`` for a rule that reads a model (that rule with the checkpoint at PATH, e.g.
+    ``success-cnn:u_hook.outcome.pt``: a pick-outcome model's P(one part) alone)."""
+    prefix, colon, rest = text.partition(":")
+    if colon and (f"{prefix}:" == MODEL_PREFIX or prefix in MODEL_RULES):
+        path = Path(rest).expanduser()
         if not path.is_file():
             raise TangleDrakeError(f"method {text!r}: model file not found: {path}")
-        return Method(f"{MODEL_PREFIX}{path}", default_rule(path), path.resolve())
+        if f"{prefix}:" == MODEL_PREFIX:
+            return Method(f"{MODEL_PREFIX}{path}", default_rule(path), path.resolve())
+        from tangle_drake.tangle_cnn.checkpoint import read_checkpoint  # imports torch
+
+        check_serves(prefix, checkpoint_objective(read_checkpoint(path)), path)
+        return Method(f"{prefix}:{path}", prefix, path.resolve())
     if text not in RULES:
         raise TangleDrakeError(f"unknown method {text!r}; choose from "
-                               f"{', '.join(RULES)} or model:PATH")
+                               f"{', '.join(RULES)}, model:PATH or RULE:PATH")
     return Method(text, text)
 
 

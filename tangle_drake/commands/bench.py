@@ -26,7 +26,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "harmonic (the paper), success-cnn (the seed's success/failure "
                              "baseline, trained/<part>.success.pt), success-harmonic (its "
                              "P(success) with graspability), emap, emap-harmonic, or "
-                             "model:PATH (your checkpoint, with its own rule); default: random "
+                             "model:PATH (your checkpoint, with its own rule), or RULE:PATH "
+                             "(a CNN rule with your checkpoint, e.g. success-cnn:M.outcome.pt"
+                             "); default: random "
                              "graspability cnn harmonic, leaving out, with a notice, a CNN "
                              "method whose part has no trained model")
     parser.add_argument("--parts", "--part", nargs="+", default=None, metavar="PART",
