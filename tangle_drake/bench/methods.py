@@ -43,10 +43,10 @@ from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem, Outpu
 from tangle_drake.bin_model import inner_corners
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability.roi import bin_roi
-from tangle_drake.pick.selection import default_rule, trained_model_path
+from tangle_drake.pick.selection import default_rule, model_objective, trained_model_path
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import camera_model
-from tangle_drake.tangle_cnn.objectives import check_serves, checkpoint_objective, rule_objective
+from tangle_drake.tangle_cnn.objectives import check_serves, rule_objective
 from tangle_drake.tangle_cnn.selection import (
     MODEL_RULES,
     RULES,
@@ -93,15 +93,14 @@ def parse_method(text: str) -> Method:
     ``RULE:PATH`` for a rule that reads a model (that rule with the checkpoint at PATH, e.g.
     ``success-cnn:u_hook.outcome.pt``: a pick-outcome model's P(one part) alone)."""
     prefix, colon, rest = text.partition(":")
-    if colon and (f"{prefix}:" == MODEL_PREFIX or prefix in MODEL_RULES):
+    own_rule = f"{prefix}:" == MODEL_PREFIX
+    if colon and (own_rule or prefix in MODEL_RULES):
         path = Path(rest).expanduser()
         if not path.is_file():
             raise TangleDrakeError(f"method {text!r}: model file not found: {path}")
-        if f"{prefix}:" == MODEL_PREFIX:
+        if own_rule:
             return Method(f"{MODEL_PREFIX}{path}", default_rule(path), path.resolve())
-        from tangle_drake.tangle_cnn.checkpoint import read_checkpoint  # imports torch
-
-        check_serves(prefix, checkpoint_objective(read_checkpoint(path)), path)
+        check_serves(prefix, model_objective(path), path)
         return Method(f"{prefix}:{path}", prefix, path.resolve())
     if text not in RULES:
         raise TangleDrakeError(f"unknown method {text!r}; choose from "

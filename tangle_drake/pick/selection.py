@@ -21,6 +21,7 @@ from tangle_drake.parts.library import PART_FILE_SUFFIX
 from tangle_drake.tangle_cnn.objectives import (
     DEFAULT_OBJECTIVE,
     DEFAULT_RULES,
+    Objective,
     checkpoint_objective,
     rule_objective,
 )
@@ -86,12 +87,17 @@ def resolve_tangle_choice(part: str, rule: str | None = None,
     return TangleChoice(None, FALLBACK_RULE, notice)
 
 
+def model_objective(model: Path) -> Objective:
+    """What the checkpoint at ``model`` predicts (its objective)."""
+    from tangle_drake.tangle_cnn.checkpoint import read_checkpoint  # imports torch
+
+    return checkpoint_objective(read_checkpoint(Path(model)))
+
+
 def default_rule(model: Path) -> str:
     """The rule the checkpoint at ``model`` picks with unless told: ``harmonic`` for a tangle
     CNN, ``success-cnn`` for a success/failure CNN."""
-    from tangle_drake.tangle_cnn.checkpoint import read_checkpoint  # imports torch
-
-    return DEFAULT_RULES[checkpoint_objective(read_checkpoint(Path(model))).name]
+    return DEFAULT_RULES[model_objective(model).name]
 
 
 def model_part_notice(model: Path, part: str) -> str | None:
