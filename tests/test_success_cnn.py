@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 from cli_run import run_command
 
 from tangle_drake.bench.methods import parse_method
@@ -96,6 +97,26 @@ def test_the_outcome_model_tells_one_part_from_a_tangle_from_an_empty_grasp(mode
     assert (probabilities.argmax(axis=1) == truth).mean() > 0.85
     assert np.array_equal(model.predict(crops, np.full(90, GRASP_DEPTH_M)),
                           probabilities[:, 0])  # P(one part) is what the rules read
+
+
+def test_a_pick_model_gives_its_data_s_rates_where_a_crop_tells_it_nothing(models, picks):
+    """Trained on balanced classes, a network that cannot tell says 1/classes; a pick model's
+    probabilities are moved back to the shares of outcomes in its data (the priors), a
+    tangle CNN's are not (the paper's balanced output)."""
+    samples, _, _ = load_checked_samples(picks, objective=OUTCOME)
+    shares = np.bincount(samples["label"].astype(int), minlength=3) / len(samples["label"])
+    assert abs(shares[0] - 1 / 3) > 0.05  # the data are not balanced
+    crops = np.stack([synthetic_crop(False, 32, np.random.default_rng(k)) for k in range(4)])
+    depths = np.full(4, GRASP_DEPTH_M)
+    for name, expected in (("outcome", shares), ("success", [shares[0], 1 - shares[0]]),
+                           ("tangled", [0.5, 0.5])):
+        model = load_tangle_model(models[name])
+        with torch.no_grad():
+            last = model.network.classifier[-1]
+            last.weight.zero_(), last.bias.zero_()  # the crop no longer matters
+        assert np.allclose(model.probabilities(crops, depths), expected, atol=1e-6)
+        balanced = model.probabilities(crops, depths, balanced=True)
+        assert np.allclose(balanced, 1 / len(expected), atol=1e-6)
 
 
 def test_evaluation_breaks_a_success_model_down_by_outcome(models, picks, tmp_path):

@@ -49,14 +49,23 @@ class _Heard(logging.Handler):
         self.messages.append(record.getMessage())
 
 
-@pytest.mark.parametrize("normalisation", [DEFAULT_NORMALISATION,
-                                           Normalisation(target_mask=TargetMask((10, 36)))])
-def test_onnx_runtime_agrees_with_torch(tmp_path, capsys, normalisation):
+PICK_DATA = {"class_counts": {"one part": 700, "several parts": 120, "no part": 180}}
+"""A pick-outcome model's training data, far from balanced: its probabilities are corrected."""
+
+
+@pytest.mark.parametrize(("normalisation", "objective"), [
+    (DEFAULT_NORMALISATION, "tangled"),
+    (Normalisation(target_mask=TargetMask((10, 36))), "tangled"),
+    (DEFAULT_NORMALISATION, "outcome")])
+def test_onnx_runtime_agrees_with_torch(tmp_path, capsys, normalisation, objective):
     torch.manual_seed(3)
-    config = NetworkConfig(input_size=64, input_channels=normalisation.channels)
+    config = NetworkConfig(input_size=64, input_channels=normalisation.channels,
+                           classes=3 if objective == "outcome" else 2)
     model_path = tmp_path / "model.pt"
     save_atomic(model_checkpoint(config, CropSpec(0.08, 64), normalisation,
-                                 TangleNet(config).state_dict(), part="u_hook"), model_path)
+                                 TangleNet(config).state_dict(), part="u_hook",
+                                 objective=objective,
+                                 data=PICK_DATA if objective == "outcome" else None), model_path)
     out = tmp_path / "export" / "model.onnx"
     exporter_log, heard = logging.getLogger("torch.onnx"), _Heard()
     exporter_log.addHandler(heard)  # torch's own handler writes to the stderr of its import
@@ -69,6 +78,7 @@ def test_onnx_runtime_agrees_with_torch(tmp_path, capsys, normalisation):
     assert [p.name for p in out.parent.iterdir()] == ["model.onnx"]  # weights inside
 
     model = load_tangle_model(model_path)
+    assert (model.class_weights is not None) == (objective == "outcome")
     session = onnxruntime.InferenceSession(str(out), providers=["CPUExecutionProvider"])
     rng = np.random.default_rng(0)
     for count in (1, 5, 33):  # the batch dimension is dynamic

@@ -74,7 +74,9 @@ def _report(result, model_path: Path) -> str:
     bad = result.classes[1] if len(result.classes) == 2 else f"not {result.classes[0]}"
     lines = [
         f"{model_path} on {result.data} ({result.scope}): {result.samples} samples, "
-        f"{result.tangled} {bad}, {result.piles} piles",
+        f"{result.tangled} {bad}, {result.piles} piles"
+        + ("; probabilities at the training data's class shares" if result.prior_corrected
+           else ""),
         f"accuracy {share(result.accuracy)} [{100 * low:.1f}, {100 * high:.1f}]  "
         f"balanced accuracy {share(result.balanced_accuracy)}  "
         f"precision {share(result.precision)}  recall {share(result.recall)}  "

@@ -9,6 +9,7 @@ from pathlib import Path
 from tangle_drake.bench.stats import wilson
 from tangle_drake.tangle_cnn.checkpoint import MODEL_KIND, read_checkpoint
 from tangle_drake.tangle_cnn.evaluate import calibration_error
+from tangle_drake.tangle_cnn.objectives import TANGLED, objective_named
 
 
 def validation_header(failure: str = "tangled") -> str:
@@ -53,13 +54,21 @@ def validation_row(path: Path) -> str:
             f"{path.stat().st_size / 1e6:.1f} MB |")
 
 
+def part_cell(part: str, result: dict) -> str:
+    """A test row's part, marked where a pick model was scored by its balanced output: tested
+    before the prior correction, its accuracy weighs the classes as if they were equal."""
+    objective = objective_named(str(result.get("objective") or TANGLED.name))
+    stale = objective.prior_corrected and not result.get("prior_corrected", False)
+    return f"{part} (balanced output)" if stale else part
+
+
 def test_row(part: str, result: dict) -> tuple[str, dict[str, str]]:
     """One row of :data:`TEST_HEADER` from an evaluation (``Evaluation.to_dict()``), and its
     right % (samples) by cause of the label."""
     low, high = result["accuracy_interval"]
     auc = "n/a" if result["auc"] is None else f"{result['auc']:.3f}"
     share = 100 * result["tangled"] / result["samples"]
-    row = (f"| {part} | {result['samples']} | {share:.1f} | {result['piles']} "
+    row = (f"| {part_cell(part, result)} | {result['samples']} | {share:.1f} | {result['piles']} "
            f"| {pct(result['accuracy'])} [{100 * low:.0f}, {100 * high:.0f}] "
            f"| {pct(result['balanced_accuracy'])} | {pct(result['precision'])} "
            f"| {pct(result['recall'])} | {auc} |")
@@ -84,6 +93,6 @@ def classes_test_row(part: str, result: dict) -> str:
     recalls = " / ".join(pct(r) for r in result["class_recall"])
     auc = "n/a" if result["auc"] is None else f"{result['auc']:.3f}"
     error = calibration_error(result["calibration"])
-    return (f"| {part} | {result['samples']} | {shares} | {result['piles']} "
+    return (f"| {part_cell(part, result)} | {result['samples']} | {shares} | {result['piles']} "
             f"| {pct(result['class_accuracy'])} | {recalls} | {auc} "
             f"| {'n/a' if error is None else f'{100 * error:.1f}'} |")

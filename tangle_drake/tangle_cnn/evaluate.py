@@ -38,6 +38,11 @@ DISTURBED_RISE_M = 0.01
 
 BATCH = 256
 
+ALL_SAMPLES = "all samples"
+"""The scope of an evaluation on data the model did not train on: its natural class shares,
+scored with the model's prior-corrected probabilities (the balanced validation rows of its own
+data are scored with the balanced output, as training scored them)."""
+
 
 @dataclass(frozen=True)
 class Group:
@@ -119,6 +124,10 @@ class Evaluation:
     calibration: tuple[Bin, ...] = ()
     """How well P(class 0) is calibrated: the samples in ten bins of it, each with its mean
     prediction and how often class 0 was the truth."""
+    prior_corrected: bool = False
+    """Whether the probabilities were moved to the training data's class shares
+    (``Objective.prior_corrected``); ``False`` for a pick model's balanced output, and in
+    figures written before the correction existed."""
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -126,15 +135,17 @@ class Evaluation:
 
 def class_probabilities(model: TangleModel, samples: dict[str, np.ndarray],
                         rows: np.ndarray | None = None,
-                        progress: Callable[[int], None] | None = None) -> np.ndarray:
+                        progress: Callable[[int], None] | None = None,
+                        balanced: bool = False) -> np.ndarray:
     """The model's class probabilities of the samples' ``rows`` (default all), (N, classes),
-    scored in batches; ``progress(n)`` is told of each batch of n samples."""
+    scored in batches (``balanced``: as ``TangleModel.probabilities``); ``progress(n)`` is
+    told of each batch of n samples."""
     rows = np.arange(len(samples["label"])) if rows is None else rows
     probabilities = np.empty((len(rows), len(model.objective.classes)), dtype=np.float64)
     for first in range(0, len(rows), BATCH):
         batch = rows[first:first + BATCH]
         probabilities[first:first + len(batch)] = model.probabilities(
-            samples["crop"][batch], samples["depth_m"][batch])
+            samples["crop"][batch], samples["depth_m"][batch], balanced)
         if progress is not None:
             progress(len(batch))
     return probabilities
@@ -151,7 +162,8 @@ def evaluate_model(model: TangleModel, directory: Path,
     labels = samples["label"].astype(np.int64)
     _check_crop(model.crop, crop, directory)
     rows, scope = _scored_rows(model, samples, labels, len(objective.classes))
-    probabilities = class_probabilities(model, samples, rows, progress)
+    corrected = model.class_weights is not None and scope == ALL_SAMPLES
+    probabilities = class_probabilities(model, samples, rows, progress, balanced=not corrected)
     # P(not the good class), as float32 arithmetic then float64, as it always was.
     p_tangled = (1.0 - probabilities[:, 0].astype(np.float32)).astype(np.float64)
     classes = labels[rows]
@@ -173,7 +185,7 @@ def evaluate_model(model: TangleModel, directory: Path,
         class_accuracy=several.get("class_accuracy"), class_recall=several.get("class_recall"),
         class_samples=([int((classes == k).sum()) for k in range(len(objective.classes))]
                        if several else None),
-        calibration=calibration(1.0 - p_tangled, truth == 0))
+        calibration=calibration(1.0 - p_tangled, truth == 0), prior_corrected=corrected)
 
 
 def _check_crop(model_crop: CropSpec, data_crop: CropSpec, directory: Path) -> None:
@@ -191,7 +203,7 @@ def _scored_rows(model: TangleModel, samples: dict[str, np.ndarray],
     data = model.info.get("data") or {}
     training = model.info.get("training") or {}
     if data.get("fingerprint") != fingerprint(samples):
-        return np.arange(len(labels)), "all samples"
+        return np.arange(len(labels)), ALL_SAMPLES
     seed = int(training.get("seed", 0))
     _, validation = split_by_pile(samples["pile_seed"],
                                   float(training.get("validation_fraction", 0.1)), seed)

@@ -15,7 +15,7 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.checkpoint import network_from, read_checkpoint
 from tangle_drake.tangle_cnn.network import TangleNet
 from tangle_drake.tangle_cnn.normalise import Normalisation
-from tangle_drake.tangle_cnn.objectives import Objective, checkpoint_objective
+from tangle_drake.tangle_cnn.objectives import Objective, checkpoint_objective, prior_weights
 
 INFERENCE_THREADS = 1
 """Threads of one prediction. A handful of 96 px crops is too little work to share: on two
@@ -49,6 +49,9 @@ class TangleModel:
                                    f"{len(self.objective.classes)} outputs, the network has "
                                    f"{network.config.classes}")
         """What :meth:`predict` gives the probability of (P(not tangled) for a tangle CNN)."""
+        self.class_weights = prior_weights(self.objective, self.info.get("data") or {})
+        """The training data's class shares that the balanced network's probabilities are
+        weighted by (``None``: its output is used as it is); see ``Objective.prior_corrected``."""
         self.source = source
         """Where the model came from (its file), for messages."""
 
@@ -57,8 +60,11 @@ class TangleModel:
         outcome model), (N,) float32, of (N, S, S) metric crops at (N,) fingertip depths."""
         return self.probabilities(crops, grasp_depths)[:, 0]
 
-    def probabilities(self, crops: np.ndarray, grasp_depths: np.ndarray) -> np.ndarray:
-        """Every class's probability, (N, classes) float32 (:attr:`objective`'s classes)."""
+    def probabilities(self, crops: np.ndarray, grasp_depths: np.ndarray,
+                      balanced: bool = False) -> np.ndarray:
+        """Every class's probability, (N, classes) float32 (:attr:`objective`'s classes);
+        ``balanced``: the network's own output, under the equal class shares it trained on
+        (to score a class-balanced set), without the prior correction."""
         crops = np.asarray(crops, dtype=np.float32)
         grasp_depths = np.asarray(grasp_depths, dtype=np.float32)
         size = self.crop.size_px
@@ -77,9 +83,13 @@ class TangleModel:
         torch.set_num_threads(INFERENCE_THREADS)
         try:
             with torch.inference_mode():
-                return torch.softmax(self.network(x), dim=1).numpy()
+                probabilities = torch.softmax(self.network(x), dim=1).numpy()
         finally:
             torch.set_num_threads(threads)
+        if self.class_weights is None or balanced:
+            return probabilities
+        weighted = probabilities * self.class_weights.astype(np.float32)
+        return weighted / weighted.sum(axis=1, keepdims=True)
 
     def warm_up(self, batch: int) -> None:
         """Predict once on ``batch`` blank crops: torch sizes its buffers on the first call

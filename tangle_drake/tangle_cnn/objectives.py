@@ -37,6 +37,13 @@ class Objective:
     """Field value -> class; other values (-1: no label) are left out."""
     data: str
     """How to make data with this field, for error messages."""
+    prior_corrected: bool = False
+    """Whether the model's probabilities are moved back from the equal class shares it trained
+    on (``split.undersample``) to its data's own shares (:func:`prior_weights`). A pick model's
+    P(one part) is then the chance that the pick brings up one part, which a rate or a
+    recovery plan can use (on the S-hook's test piles the outcome model's calibration error fell
+    from 31 to 10 points); the tangle CNN keeps the paper's balanced output, which its
+    harmonic-mean rule was made with."""
 
     @property
     def probability(self) -> str:
@@ -55,9 +62,10 @@ class Objective:
 TANGLED = Objective("tangled", ("not tangled", "tangled"), "label", {0: 0, 1: 1},
                     "`tangle-drake collect` (either --label)")
 _PICKS = "`tangle-drake collect --label pick` (or a pick log)"
-SUCCESS = Objective("success", ("success", "failure"), "outcome", {1: 0, 2: 1, 0: 1}, _PICKS)
+SUCCESS = Objective("success", ("success", "failure"), "outcome", {1: 0, 2: 1, 0: 1}, _PICKS,
+                    prior_corrected=True)
 OUTCOME = Objective("outcome", ("one part", "several parts", "no part"), "outcome",
-                    {1: 0, 2: 1, 0: 2}, _PICKS)
+                    {1: 0, 2: 1, 0: 2}, _PICKS, prior_corrected=True)
 OBJECTIVES = {o.name: o for o in (TANGLED, SUCCESS, OUTCOME)}
 DEFAULT_OBJECTIVE = TANGLED.name
 
@@ -85,6 +93,21 @@ def objective_named(name: str) -> Objective:
 def checkpoint_objective(info: dict[str, Any]) -> Objective:
     """The objective of a checkpoint's metadata (a tangle CNN if it names none)."""
     return objective_named(str(info.get("objective") or DEFAULT_OBJECTIVE))
+
+
+def prior_weights(objective: Objective, data: dict[str, Any]) -> np.ndarray | None:
+    """Each class's share of the training data (a checkpoint's ``data`` summary), by which a
+    prior-corrected objective's probabilities are multiplied and then renormalised: a network
+    trained on balanced classes gives p(class | crop) under equal priors, and Bayes' rule moves
+    it to the data's. ``None`` where nothing is corrected (the objective keeps balanced output,
+    or the checkpoint lacks its class counts)."""
+    counts = data.get("class_counts") if objective.prior_corrected else None
+    if not isinstance(counts, dict):
+        return None
+    shares = np.array([float(counts.get(name, 0)) for name in objective.classes])
+    if not (np.isfinite(shares).all() and (shares > 0).all()):
+        return None
+    return shares / shares.sum()
 
 
 def check_serves(rule: str, objective: Objective, model: object) -> None:

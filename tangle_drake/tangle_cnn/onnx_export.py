@@ -34,18 +34,26 @@ OUTPUT = "p_not_tangled"
 
 
 class _ProbabilityGraph(nn.Module):
-    """Normalisation + network + softmax: the whole of ``TangleModel.predict`` in torch."""
+    """Normalisation + network + softmax (+ the prior correction of a pick model,
+    ``TangleModel.class_weights``): the whole of ``TangleModel.predict`` in torch."""
 
-    def __init__(self, network: TangleNet, normalisation: Normalisation) -> None:
+    def __init__(self, network: TangleNet, normalisation: Normalisation,
+                 class_weights: np.ndarray | None) -> None:
         super().__init__()
         self.network = network
         self.normalisation = normalisation
+        self.class_weights = (None if class_weights is None else
+                              torch.as_tensor(class_weights, dtype=torch.float32))
 
     def forward(self, crops: torch.Tensor, grasp_depths: torch.Tensor) -> torch.Tensor:
         return self.probability(self.normalisation.apply(crops, grasp_depths).unsqueeze(1))
 
     def probability(self, x: torch.Tensor) -> torch.Tensor:
-        return torch.softmax(self.network(x), dim=1)[:, 0]
+        probabilities = torch.softmax(self.network(x), dim=1)
+        if self.class_weights is not None:
+            weighted = probabilities * self.class_weights
+            probabilities = weighted / weighted.sum(dim=1, keepdim=True)
+        return probabilities[:, 0]
 
 
 class _MaskedProbabilityGraph(_ProbabilityGraph):
@@ -76,7 +84,7 @@ def export_onnx(model: TangleModel, out: Path) -> None:
     batch = torch.export.Dim("batch")
     kind = _ProbabilityGraph if model.normalisation.target_mask is None else \
         _MaskedProbabilityGraph
-    graph = kind(model.network, model.normalisation).eval()
+    graph = kind(model.network, model.normalisation, model.class_weights).eval()
     exporter_log = logging.getLogger("torch.onnx")
     level = exporter_log.level
     exporter_log.setLevel(logging.ERROR)  # "torchvision is not installed. Skipping ..."
