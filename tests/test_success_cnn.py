@@ -15,7 +15,7 @@ from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.dataset import load_samples
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.pick.selection import resolve_tangle_choice
-from tangle_drake.tangle_cnn.card import classes_test_header, classes_test_row
+from tangle_drake.tangle_cnn.card import classes_test_header, classes_test_row, validation_row
 from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
 from tangle_drake.tangle_cnn.evaluate import calibration_error, evaluate_model
 from tangle_drake.tangle_cnn.model import load_tangle_model
@@ -97,6 +97,12 @@ def test_the_outcome_model_tells_one_part_from_a_tangle_from_an_empty_grasp(mode
     assert (probabilities.argmax(axis=1) == truth).mean() > 0.85
     assert np.array_equal(model.predict(crops, np.full(90, GRASP_DEPTH_M)),
                           probabilities[:, 0])  # P(one part) is what the rules read
+    # Its record and card count the picks that did not bring up one part (several or none).
+    data = read_checkpoint(models["outcome"])["data"]
+    assert data["tangled"] == data["samples"] - data["class_counts"]["one part"]
+    assert data["class_counts"]["no part"] > 0
+    share = float(validation_row(models["outcome"]).strip("|").split("|")[2])
+    assert share == pytest.approx(100 * data["tangled"] / data["samples"], abs=0.05)
 
 
 def test_a_pick_model_gives_its_data_s_rates_where_a_crop_tells_it_nothing(models, picks):

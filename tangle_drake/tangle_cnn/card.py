@@ -42,7 +42,9 @@ def validation_row(path: Path) -> str:
     data, metrics = checkpoint["data"], checkpoint["metrics"]
 
     auc = metrics.get("val_auc")
-    tangled = 100 * data["tangled"] / data["samples"]
+    counts = data.get("class_counts")  # class 0 first; older checkpoints have two classes
+    failures = data["samples"] - next(iter(counts.values())) if counts else data["tangled"]
+    tangled = 100 * failures / data["samples"]
     n = data["validation_samples"]
     low, high = wilson(round(metrics["val_accuracy"] * n), n)
     return (f"| {checkpoint['part']} | {data['samples']} | {tangled:.1f} | {data['piles']} "

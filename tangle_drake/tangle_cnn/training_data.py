@@ -123,7 +123,7 @@ def load_training_data(directory: Path, normalisation: Normalisation,
         "path": str(directory),
         "fingerprint": fingerprint(samples),
         "samples": len(labels),
-        "tangled": int(counts[1]),
+        "tangled": int(len(labels) - counts[0]),  # not the good class, as ``Evaluation``'s
         "objective": objective.name,
         "class_counts": {name: int(n) for name, n in zip(objective.classes, counts, strict=True)},
         "piles": len(np.unique(piles)),
