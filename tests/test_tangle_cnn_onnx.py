@@ -89,7 +89,9 @@ def test_onnx_runtime_agrees_with_torch(tmp_path, capsys, normalisation, objecti
             feed["target_masks"] = normalisation.masks(crops, depths)
             assert feed["target_masks"].sum(axis=(1, 2)).min() > 50  # not the seed alone
         assert [i.name for i in session.get_inputs()] == list(feed)
-        (p_onnx,) = session.run(["p_not_tangled"], feed)
+        output = "p_one_part" if objective == "outcome" else "p_not_tangled"
+        assert [o.name for o in session.get_outputs()] == [output]
+        (p_onnx,) = session.run([output], feed)
         assert p_onnx.shape == (count,)
         assert np.abs(p_onnx - model.predict(crops, depths)).max() < 1e-5
 

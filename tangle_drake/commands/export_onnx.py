@@ -13,7 +13,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "inputs crops (N, S, S) metres and grasp_depths (N,), and for a model "
                     "with a target mask (the default of `train`) target_masks (N, S, S), "
                     "computed outside the graph (tangle_drake.tangle_cnn.target_mask); output "
-                    "p_not_tangled (N,), normalisation included. Then compare it with torch on "
+                    "p_not_tangled (N,) (p_success or p_one_part for a pick model), "
+                    "normalisation included. Then compare it with torch on "
                     "random crops (needs onnxruntime). Needs the onnx extra.")
     parser.add_argument("--model", type=Path, required=True, help="checkpoint (.pt)")
     parser.add_argument("--out", type=Path, required=True, help="ONNX file to write")

@@ -2,13 +2,14 @@
 
 The ONNX graph takes what ``TangleModel.predict`` takes and returns what it returns:
 inputs ``crops`` (N, S, S) float32 metric crops and ``grasp_depths`` (N,) float32 fingertip
-depths, output ``p_not_tangled`` (N,); N is dynamic. The normalisation is inside the graph,
-and the crop spec and normalisation are in the model's metadata (``tangle_drake.*`` keys), so
-the file alone says how to cut its input. A model with a target mask (``target_mask.py``)
-takes a third input, ``target_masks`` (N, S, S) float32: the flood fill is not an ONNX
-operator, so the caller computes it (``Normalisation.masks``; its spec is in the
-``tangle_drake.normalisation`` metadata). Needs the ``onnx`` extra (onnx, onnxscript;
-onnxruntime to check the result).
+depths, output the probability of the model's good class (N,) (:func:`output_name`:
+``p_not_tangled``, ``p_success`` or ``p_one_part``); N is dynamic. The normalisation is
+inside the graph, and the crop spec and normalisation are in the model's metadata
+(``tangle_drake.*`` keys), so the file alone says how to cut its input. A model with a
+target mask (``target_mask.py``) takes a third input, ``target_masks`` (N, S, S) float32:
+the flood fill is not an ONNX operator, so the caller computes it (``Normalisation.masks``;
+its spec is in the ``tangle_drake.normalisation`` metadata). Needs the ``onnx`` extra (onnx,
+onnxscript; onnxruntime to check the result).
 """
 
 from __future__ import annotations
@@ -30,7 +31,6 @@ from tangle_drake.tangle_cnn.normalise import Normalisation
 OPSET = 18
 INPUTS = ("crops", "grasp_depths")
 MASK_INPUT = "target_masks"
-OUTPUT = "p_not_tangled"
 
 
 class _ProbabilityGraph(nn.Module):
@@ -65,6 +65,12 @@ class _MaskedProbabilityGraph(_ProbabilityGraph):
         return self.probability(torch.stack([height, target_masks], dim=1))
 
 
+def output_name(model: TangleModel) -> str:
+    """The ONNX graph's output, named for what it is the probability of: ``p_not_tangled``
+    for a tangle CNN, ``p_success`` or ``p_one_part`` for a pick model."""
+    return "p_" + model.objective.classes[0].replace(" ", "_")
+
+
 def input_names(model: TangleModel) -> tuple[str, ...]:
     """The ONNX graph's inputs for ``model``, in order."""
     return INPUTS if model.normalisation.target_mask is None else (*INPUTS, MASK_INPUT)
@@ -94,7 +100,8 @@ def export_onnx(model: TangleModel, out: Path) -> None:
             warnings.filterwarnings("ignore", message=".*axis name: batch will not be used")
             program = torch.onnx.export(
                 graph, example, dynamo=True, opset_version=OPSET, input_names=list(names),
-                output_names=[OUTPUT], dynamic_shapes={name: {0: batch} for name in names},
+                output_names=[output_name(model)],
+                dynamic_shapes={name: {0: batch} for name in names},
                 external_data=False, verbose=False)
     except ImportError as error:
         raise TangleDrakeError(f"ONNX export needs the onnx extra ({error}): pip install "
@@ -127,5 +134,5 @@ def onnx_disagreement(model: TangleModel, onnx_path: Path, samples: int = 64,
     feed = {"crops": crops, "grasp_depths": depths}
     if model.normalisation.target_mask is not None:
         feed[MASK_INPUT] = model.normalisation.masks(crops, depths)
-    (p_onnx,) = session.run([OUTPUT], feed)
+    (p_onnx,) = session.run([output_name(model)], feed)
     return float(np.abs(p_onnx - model.predict(crops, depths)).max())
