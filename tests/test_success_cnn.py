@@ -119,7 +119,8 @@ def test_a_pick_model_gives_its_data_s_rates_where_a_crop_tells_it_nothing(model
         model = load_tangle_model(models[name])
         with torch.no_grad():
             last = model.network.classifier[-1]
-            last.weight.zero_(), last.bias.zero_()  # the crop no longer matters
+            last.weight.zero_()  # the crop no longer matters
+            last.bias.zero_()
         assert np.allclose(model.probabilities(crops, depths), expected, atol=1e-6)
         balanced = model.probabilities(crops, depths, balanced=True)
         assert np.allclose(balanced, 1 / len(expected), atol=1e-6)

@@ -83,8 +83,11 @@ class ModelKind:
     """``collect``'s extra arguments."""
     data_suffix: str
     """Of the dataset directory: ``DATA/P{data_suffix}``."""
-    failure: str
-    """The name of the model's class 1, for the card."""
+
+    @property
+    def failure(self) -> str:
+        """The words for the model's class(es) other than 0, for the card."""
+        return objective_named(self.objective).failure
 
     def model(self, part: str) -> Path:
         """Where ``part``'s shipped model is installed (and the demo and bench look for it)."""
@@ -95,9 +98,9 @@ class ModelKind:
         return self.model(part).with_suffix(".test.json")
 
 
-KINDS = {"tangled": ModelKind("tangled", (), "", "tangled"),
-         "success": ModelKind("success", ("--label", "pick"), "_pick", "failure"),
-         "outcome": ModelKind("outcome", ("--label", "pick"), "_pick", "not one part")}
+KINDS = {"tangled": ModelKind("tangled", (), ""),
+         "success": ModelKind("success", ("--label", "pick"), "_pick"),
+         "outcome": ModelKind("outcome", ("--label", "pick"), "_pick")}
 """The success/failure CNN and the pick-outcome model learn from the same physical picks."""
 
 

@@ -7,6 +7,8 @@ import json
 import sys
 from pathlib import Path
 
+from tangle_drake.tangle_cnn.objectives import objective_named
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
@@ -71,7 +73,7 @@ def _report(result, model_path: Path) -> str:
         return "n/a" if value is None else f"{100 * value:.1f} %"
 
     low, high = result.accuracy_interval
-    bad = result.classes[1] if len(result.classes) == 2 else f"not {result.classes[0]}"
+    bad = objective_named(result.objective).failure
     lines = [
         f"{model_path} on {result.data} ({result.scope}): {result.samples} samples, "
         f"{result.tangled} {bad}, {result.piles} piles"

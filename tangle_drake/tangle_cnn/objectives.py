@@ -46,6 +46,12 @@ class Objective:
     harmonic-mean rule was made with."""
 
     @property
+    def failure(self) -> str:
+        """The words for the samples not of class 0 (its class 1 where there are two), e.g.
+        ``tangled``, ``not one part``."""
+        return self.classes[1] if len(self.classes) == 2 else f"not {self.classes[0]}"
+
+    @property
     def probability(self) -> str:
         """The words for what the model predicts, e.g. ``P(not tangled)``."""
         return f"P({self.classes[0]})"

@@ -113,9 +113,8 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
         net.load_state_dict(state["weights"])
         optimiser.load_state_dict(state["optimiser"])
         log(f"resuming {out} after epoch {state['epoch']}")
-    failure = objective.classes[1] if len(objective.classes) == 2 else \
-        f"not {objective.classes[0]}"
-    log(f"data: {data.summary['samples']} samples ({data.summary['tangled']} {failure}) in "
+    log(f"data: {data.summary['samples']} samples ({data.summary['tangled']} "
+        f"{objective.failure}) in "
         f"{data.summary['piles']} piles; training on {len(data.train)} x "
         f"{AUGMENTATIONS[settings.augment]} (augment {settings.augment}), validating on "
         f"{len(data.validation)}; device {dev}")
