@@ -18,7 +18,7 @@ from pydrake.math import RigidTransform
 from tangle_drake.bench.clear_report import figures
 from tangle_drake.bench.clearing import EscapeWatch
 from tangle_drake.bench.gallery import GALLERY, INDEX, TILE_KEY, tile_path
-from tangle_drake.bench.methods import MethodRun, MethodSelector
+from tangle_drake.bench.methods import MethodRun, MethodSelector, parse_method
 from tangle_drake.bench.report import terminal_summary
 from tangle_drake.bench.results import IDENTITY_FILE, RESULTS_FILE
 from tangle_drake.bench.runner import BenchOptions, plan, run_bench
@@ -353,6 +353,17 @@ def test_a_cnn_method_without_a_model_is_an_error_or_left_out_of_the_defaults(
     assert [m.name for m in config.methods["u_hook"]] == ["random", "graspability"]
     assert trials == 50 and config.mode == "floating"
     assert len(notices) == 1 and "cnn, harmonic" in notices[0] and "u_hook.pt" in notices[0]
+
+
+def test_the_outcome_method_reads_the_part_s_pick_outcome_model(tmp_path, monkeypatch):
+    monkeypatch.setattr("tangle_drake.pick.selection.TRAINED_DIR", tmp_path)
+    method = parse_method("outcome")
+    assert (method.rule, method.model_for("c_ring")) == ("success-harmonic",
+                                                          tmp_path / "c_ring.outcome.pt")
+    assert parse_method("success-harmonic").model_for("c_ring") == tmp_path / "c_ring.success.pt"
+    with pytest.raises(TangleDrakeError, match=r"'outcome' needs a model of P\(one part\).*"
+                                               r"u_hook\.outcome\.pt.*--objective outcome"):
+        plan(replace(QUICK, methods=["graspability", "outcome"]))
 
 
 def test_perturbed_physics_is_one_draw_per_pile_and_part_of_the_runs_identity():

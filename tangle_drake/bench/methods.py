@@ -15,6 +15,9 @@ method               the candidate tried first
                     from the part's success/failure CNN, ``trained/<part>.success.pt``
 ``success-harmonic`` the harmonic mean of graspability and that P(success) (a pick-outcome
                     model's P(one part) serves both)
+``outcome``         the part's pick-outcome model, ``trained/<part>.outcome.pt``, with the rule
+                    it picks with unless told (its P(one part) with graspability, as
+                    ``success-harmonic``)
 ``emap``            Zhang et al. 2021: graspability re-ranked by low entanglement (the
                     topological entanglement map, no training)
 ``emap-harmonic``   the harmonic mean of graspability, P(not tangled) and 1 - entanglement
@@ -46,7 +49,13 @@ from tangle_drake.graspability.roi import bin_roi
 from tangle_drake.pick.selection import default_rule, model_objective, trained_model_path
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import camera_model
-from tangle_drake.tangle_cnn.objectives import check_serves, rule_objective
+from tangle_drake.tangle_cnn.objectives import (
+    DEFAULT_RULES,
+    OUTCOME,
+    Objective,
+    check_serves,
+    rule_objective,
+)
 from tangle_drake.tangle_cnn.selection import (
     MODEL_RULES,
     RULES,
@@ -61,6 +70,9 @@ DEFAULT_METHODS = ("random", "graspability", "cnn", "harmonic")
 """The methods a run compares unless told otherwise (every rule is a method, under its own
 name; the ``emap`` ones on request)."""
 MODEL_PREFIX = "model:"
+SHIPPED_MODEL_METHODS = {OUTCOME.name: OUTCOME}
+"""Methods named for a shipped model other than their rule's first (``outcome``: the part's
+pick-outcome model, where ``success-harmonic`` reads its success/failure CNN)."""
 
 
 @dataclass(frozen=True)
@@ -72,6 +84,13 @@ class Method:
     model: Path | None = None
     """The user's checkpoint (``model:PATH``); ``None``: the part's shipped model, if the
     rule needs one."""
+    shipped: Objective | None = None
+    """Which of the part's shipped models it reads; ``None``: the one shipped for its rule."""
+
+    @property
+    def objective(self) -> Objective:
+        """What the part's shipped model for this method predicts."""
+        return self.shipped or rule_objective(self.rule)
 
     @property
     def needs_model(self) -> bool:
@@ -85,7 +104,7 @@ class Method:
     def model_for(self, part: str) -> Path:
         """The checkpoint this method uses on ``part`` (which may not exist)."""
         return self.model if self.model is not None else \
-            trained_model_path(part, rule_objective(self.rule).name)
+            trained_model_path(part, self.objective.name)
 
 
 def parse_method(text: str) -> Method:
@@ -102,9 +121,13 @@ def parse_method(text: str) -> Method:
             return Method(f"{MODEL_PREFIX}{path}", default_rule(path), path.resolve())
         check_serves(prefix, model_objective(path), path)
         return Method(f"{prefix}:{path}", prefix, path.resolve())
+    if text in SHIPPED_MODEL_METHODS:
+        objective = SHIPPED_MODEL_METHODS[text]
+        return Method(text, DEFAULT_RULES[objective.name], shipped=objective)
     if text not in RULES:
         raise TangleDrakeError(f"unknown method {text!r}; choose from "
-                               f"{', '.join(RULES)}, model:PATH or RULE:PATH")
+                               f"{', '.join((*RULES, *SHIPPED_MODEL_METHODS))}, model:PATH or "
+                               "RULE:PATH")
     return Method(text, text)
 
 

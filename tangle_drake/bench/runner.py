@@ -47,7 +47,6 @@ from tangle_drake.pile import check_pile
 from tangle_drake.progress import Progress
 from tangle_drake.scenario import parse_scenario
 from tangle_drake.scenario_files import scenario_path
-from tangle_drake.tangle_cnn.objectives import rule_objective
 from tangle_drake.tangle_data.perturb import PhysicsSpread
 from tangle_drake.workers import start_workers
 
@@ -154,7 +153,7 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
                                                         pile_size=pile_size), spec))
         missing = [m for m in methods if m.needs_model and not m.model_for(spec.name).is_file()]
         if missing and explicit:
-            objective = rule_objective(missing[0].rule)
+            objective = missing[0].objective
             raise TangleDrakeError(
                 f"method {missing[0].name!r} needs a model of {objective.probability} for part "
                 f"{spec.name!r}, and {missing[0].model_for(spec.name)} does not exist: train "
