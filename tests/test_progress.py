@@ -31,3 +31,15 @@ def test_a_collection_reports_its_samples_and_balance(capsys):
     out = capsys.readouterr().out
     assert "collect u_hook: 10/20 samples, tangled 40%, skipped 0" in out
     assert progress.per_minute_per_worker() > 0
+
+
+def test_a_pick_collection_reports_what_came_up(capsys):
+    from tangle_drake.tangle_data.physical import PhysicalPickSimulator
+
+    counts = {"samples": 5, "tangled": 1, "one": 3, "none": 1, "failed": 2}
+    progress = CollectProgress("collect s_hook", 20, counts, workers=1, line_interval=0.0,
+                               shares=PhysicalPickSimulator.SHARES)
+    progress.task_done({"samples": 5, "tangled": 0, "one": 4, "none": 1, "failed": 0})
+    progress.close()
+    out = capsys.readouterr().out
+    assert "10/20 samples, one part 70%, several 10%, none 20%, skipped 2" in out

@@ -145,7 +145,7 @@ def _run(store: DatasetStore, factory: type, args: tuple, per_task: int, seed: i
         return CollectionResult(store.directory, store.counts(), 0, False, 0.0)
     backend = start_workers(factory, args, workers, ray_address)
     progress = CollectProgress(name, samples, store.counts(), backend.capacity,
-                               show_progress)
+                               show_progress, shares=factory.SHARES)
     pending: dict[Future, int] = {}
     handed_out: collections.deque[int] = collections.deque()  # not yet stored, in order
     early: dict[int, TaskResult] = {}  # finished, waiting for an earlier task

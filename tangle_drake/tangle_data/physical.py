@@ -117,6 +117,9 @@ def pick_data_scenario(scenario_text: str, settings: PickDataSettings) -> Scenar
 class PhysicalPickSimulator:
     """Builds the part's pick rig once and runs tasks on it (one per settled pile)."""
 
+    SHARES = (("one", "one part"), ("tangled", "several"), ("none", "none"))
+    """The task counts the progress shows as shares of the samples (``tangled``: several)."""
+
     def __init__(self, scenario_text: str, settings: PickDataSettings) -> None:
         self.settings = settings
         self.scenario = pick_data_scenario(scenario_text, settings)

@@ -11,9 +11,13 @@ class CollectProgress:
     summary either way."""
 
     def __init__(self, description: str, target: int, counts: dict, workers: int,
-                 enabled: bool | None = None, line_interval: float = LINE_INTERVAL_S) -> None:
+                 enabled: bool | None = None, line_interval: float = LINE_INTERVAL_S,
+                 shares: tuple[tuple[str, str], ...] = (("tangled", "tangled"),)) -> None:
+        """``shares``: ``(count, words)`` of the task counts shown as shares of the samples
+        (the auto-lift's tangled; a physical pick's one part, several, none)."""
         self.samples = counts["samples"]
-        self.tangled = counts["tangled"]
+        self.shares = shares
+        self.counted = {key: counts.get(key, 0) for key, _ in shares}
         self.skipped = _skipped(counts)
         self.workers = workers
         self.progress = Progress(target, self.samples, "sample", description, enabled,
@@ -22,7 +26,8 @@ class CollectProgress:
 
     def task_done(self, stats: dict) -> None:
         self.samples += stats["samples"]
-        self.tangled += stats["tangled"]
+        for key in self.counted:
+            self.counted[key] += stats.get(key, 0)
         self.skipped += _skipped(stats)
         self.progress.update(stats["samples"], self._figures())
 
@@ -31,8 +36,10 @@ class CollectProgress:
         return self.progress.per_minute() / self.workers
 
     def _figures(self) -> str:
-        share = f"{100 * self.tangled / self.samples:.0f}%" if self.samples else "-"
-        return (f"tangled {share}, skipped {self.skipped}, "
+        shares = "".join(
+            f"{words} {100 * self.counted[key] / self.samples:.0f}%, " if self.samples else
+            f"{words} -, " for key, words in self.shares)
+        return (f"{shares}skipped {self.skipped}, "
                 f"{self.per_minute_per_worker():.1f}/min/worker")
 
     def close(self) -> None:
