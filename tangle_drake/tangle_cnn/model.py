@@ -23,6 +23,17 @@ cores, two threads took 8 ms where one takes 2-4 ms, and 200 ms whenever another
 physics, a benchmark worker) held the other core, as torch's threads wait on each other."""
 
 
+def class_probabilities(logits: torch.Tensor, weights: torch.Tensor | None) -> torch.Tensor:
+    """The softmax of ``logits`` (N, classes), moved by Bayes' rule to the class shares
+    ``weights`` and renormalised (as it is for ``None``): a pick model's prior correction, the
+    one place for it (:class:`TangleModel` and its ONNX graph)."""
+    probabilities = torch.softmax(logits, dim=1)
+    if weights is None:
+        return probabilities
+    weighted = probabilities * weights
+    return weighted / weighted.sum(dim=1, keepdim=True)
+
+
 class TangleModel:
     """The network in eval mode on the CPU, with the crop spec and normalisation it was trained
     with, so callers hand over metric crops or whole depth images and never normalise.
@@ -44,12 +55,14 @@ class TangleModel:
         self.info = info or {}
         """The checkpoint's metadata (everything but the weights)."""
         self.objective: Objective = checkpoint_objective(self.info)
+        """What :meth:`predict` gives the probability of (P(not tangled) for a tangle CNN)."""
         if len(self.objective.classes) != network.config.classes:
             raise TangleDrakeError(f"a {self.objective.name} model needs "
                                    f"{len(self.objective.classes)} outputs, the network has "
                                    f"{network.config.classes}")
-        """What :meth:`predict` gives the probability of (P(not tangled) for a tangle CNN)."""
-        self.class_weights = prior_weights(self.objective, self.info.get("data") or {})
+        weights = prior_weights(self.objective, self.info.get("data") or {})
+        self.class_weights = None if weights is None else torch.as_tensor(weights,
+                                                                          dtype=torch.float32)
         """The training data's class shares that the balanced network's probabilities are
         weighted by (``None``: its output is used as it is); see ``Objective.prior_corrected``."""
         self.source = source
@@ -83,13 +96,11 @@ class TangleModel:
         torch.set_num_threads(INFERENCE_THREADS)
         try:
             with torch.inference_mode():
-                probabilities = torch.softmax(self.network(x), dim=1).numpy()
+                probabilities = class_probabilities(
+                    self.network(x), None if balanced else self.class_weights).numpy()
         finally:
             torch.set_num_threads(threads)
-        if self.class_weights is None or balanced:
-            return probabilities
-        weighted = probabilities * self.class_weights.astype(np.float32)
-        return weighted / weighted.sum(axis=1, keepdims=True)
+        return probabilities
 
     def warm_up(self, batch: int) -> None:
         """Predict once on ``batch`` blank crops: torch sizes its buffers on the first call

@@ -24,7 +24,7 @@ import torch
 from torch import nn
 
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.tangle_cnn.model import TangleModel
+from tangle_drake.tangle_cnn.model import TangleModel, class_probabilities
 from tangle_drake.tangle_cnn.network import TangleNet
 from tangle_drake.tangle_cnn.normalise import Normalisation
 
@@ -38,22 +38,17 @@ class _ProbabilityGraph(nn.Module):
     ``TangleModel.class_weights``): the whole of ``TangleModel.predict`` in torch."""
 
     def __init__(self, network: TangleNet, normalisation: Normalisation,
-                 class_weights: np.ndarray | None) -> None:
+                 class_weights: torch.Tensor | None) -> None:
         super().__init__()
         self.network = network
         self.normalisation = normalisation
-        self.class_weights = (None if class_weights is None else
-                              torch.as_tensor(class_weights, dtype=torch.float32))
+        self.class_weights = class_weights
 
     def forward(self, crops: torch.Tensor, grasp_depths: torch.Tensor) -> torch.Tensor:
         return self.probability(self.normalisation.apply(crops, grasp_depths).unsqueeze(1))
 
     def probability(self, x: torch.Tensor) -> torch.Tensor:
-        probabilities = torch.softmax(self.network(x), dim=1)
-        if self.class_weights is not None:
-            weighted = probabilities * self.class_weights
-            probabilities = weighted / weighted.sum(dim=1, keepdim=True)
-        return probabilities[:, 0]
+        return class_probabilities(self.network(x), self.class_weights)[:, 0]
 
 
 class _MaskedProbabilityGraph(_ProbabilityGraph):
