@@ -239,7 +239,7 @@ def test_the_quick_benchmark_writes_its_report(quick_run, untrained_model):
     assert len(rows) == 1 + 2 * 3  # a row per pick
     model_picks = [p for t in trials_in(out) for p in t["picks"] if p["method"].startswith(
         "model:")]
-    assert all(p.get("p_not_tangled") is not None for p in model_picks
+    assert all(p.get("p_model") is not None for p in model_picks
                if p["result"] != "failure")
     assert "| method | u_hook | all |" in (out / "report.md").read_text()
     assert "## Timings" in (out / "report.md").read_text()
@@ -260,7 +260,7 @@ def test_the_quick_benchmark_runs_a_pick_outcome_model_with_its_own_rule(tmp_pat
     assert [m["rule"] for m in identity["methods"]["u_hook"]] == ["graspability",
                                                                   "success-harmonic"]
     picks = [p for t in trials_in(out) for p in t["picks"] if p["method"] == f"model:{model}"]
-    assert len(picks) == 2 and all(p.get("p_not_tangled") is not None for p in picks
+    assert len(picks) == 2 and all(p.get("p_model") is not None for p in picks
                                    if p["result"] != "failure")  # its P(one part)
 
 

@@ -165,8 +165,8 @@ def test_the_system_ranks_graspabilitys_candidates_by_low_entanglement(scene):
     cnn = [ScoredCandidate(c, p, 0.0) for c, p in zip(candidates, (0.9, 0.2, 0.8),
                                                        strict=True)]
     scored = _system_outputs(fused, scene.astype(np.float32), candidates, cnn)
-    assert [s.p_not_tangled for s in scored["scored_candidates"]] == [
-        s.p_not_tangled for s in rank_candidates("emap-harmonic", candidates,
+    assert [s.p_model for s in scored["scored_candidates"]] == [
+        s.p_model for s in rank_candidates("emap-harmonic", candidates,
                                                  np.array([0.9, 0.2, 0.8]),
                                                  entanglement=entanglement)]
     with pytest.raises(TangleDrakeError, match="needs the tangle CNN"):

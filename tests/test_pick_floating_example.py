@@ -34,6 +34,6 @@ def test_the_floating_gripper_picks_with_the_shared_state_machine(tmp_path, caps
     assert len(records) == 1
     record = records[0]
     assert record.outcome is not Outcome.FAILED, record.reason
-    assert record.p_not_tangled is not None  # the CNN scored the candidates
+    assert record.p_model is not None  # the CNN scored the candidates
     assert record.lifted is not None
     assert "1 pick(s): " in capsys.readouterr().out

@@ -286,20 +286,22 @@ def test_no_candidate_fails_the_pick_and_stops():
 
 def test_scored_candidates_set_the_order():
     low, high = candidate(0, 0.9), candidate(1, 0.5)
-    scored = [ScoredCandidate(high, 0.95, 0.7), ScoredCandidate(low, 0.1, 0.2)]  # best first
+    scored = [ScoredCandidate(high, 0.95, 0.7, "P(success)"),  # best first
+              ScoredCandidate(low, 0.1, 0.2, "P(success)")]
     motion = FakeMotion()
     records, _, _, _ = run([low, high], motion, lifted=1, scored=scored, picks=1)
     assert motion.planned == [1]
-    assert records[0].p_not_tangled == pytest.approx(0.95)
+    assert records[0].p_model == pytest.approx(0.95)
+    assert "(graspability 0.50, P(success) 0.95)" in records[0].describe()  # the model's words
 
 
 def test_rank_scored_keeps_the_selection_order_with_the_selected_grasp_first():
     a, b, c = candidate(0, 0.9), candidate(1, 0.8), candidate(2, 0.7)
     scored = [ScoredCandidate(c, 0.9, 0.8), ScoredCandidate(a, 0.5, 0.6),
               ScoredCandidate(b, 0.5, 0.6)]
-    assert [x.u for x, _ in rank_scored(scored)] == [20.0, 0.0, 10.0]
+    assert [s.candidate.u for s in rank_scored(scored)] == [20.0, 0.0, 10.0]
     selected = Candidate(b.u, b.v, b.angle_deg, b.score, b.pose)  # a copy, as ports deliver
-    assert [x.u for x, _ in rank_scored(scored, selected)] == [10.0, 20.0, 0.0]
+    assert [s.candidate.u for s in rank_scored(scored, selected)] == [10.0, 20.0, 0.0]
 
 
 def test_settings_refuse_nonsense():

@@ -92,8 +92,8 @@ def test_rank_candidates_orders_the_candidates_themselves():
                   for i, s in enumerate(GRASPABILITY)]
     scored = rank_candidates("harmonic", candidates, P_NOT_TANGLED)
     assert [s.candidate.u for s in scored] == [1.0, 3.0, 2.0, 0.0]
-    assert scored[0].p_not_tangled == pytest.approx(0.9)
-    assert [s.p_not_tangled for s in rank_candidates("graspability", candidates)] == [None] * 4
+    assert scored[0].p_model == pytest.approx(0.9)
+    assert [s.p_model for s in rank_candidates("graspability", candidates)] == [None] * 4
 
 
 @pytest.mark.parametrize("rule", RULES)

@@ -74,7 +74,8 @@ def test_scores_every_candidate_and_selects_by_the_rule(model, depth, rule):
     # Best first, in the rule's order: the order the planner tries them in.
     assert [s.candidate for s in scored] == [CANDIDATES[i] for i in expected.order]
     assert all(isinstance(s, ScoredCandidate) for s in scored)
-    assert np.allclose([s.p_not_tangled for s in scored], p[expected.order])
+    assert np.allclose([s.p_model for s in scored], p[expected.order])
+    assert {s.p_model_name for s in scored} == {"P(not tangled)"}  # what the model predicts
     assert np.allclose([s.score for s in scored], expected.scores[expected.order])
     # Drake copies abstract values between ports: equal, not identical.
     assert system.GetOutputPort("selected_grasp").Eval(context) == CANDIDATES[expected.order[0]]

@@ -51,8 +51,8 @@ def test_the_network_learns_crossing_bars(dataset, tmp_path):
     rng = np.random.default_rng(99)
     labels = np.arange(100) % 2
     crops = np.stack([synthetic_crop(bool(label), 32, rng) for label in labels])
-    p_not_tangled = model.predict(crops, np.full(100, GRASP_DEPTH_M))
-    assert ((p_not_tangled < 0.5) == labels).mean() > 0.9
+    p_model = model.predict(crops, np.full(100, GRASP_DEPTH_M))
+    assert ((p_model < 0.5) == labels).mean() > 0.9
 
 
 def test_train_cli_writes_checkpoint_and_log_and_resumes_after_an_interrupt(

@@ -27,7 +27,7 @@ ALL = "all"
 TIMINGS = ("perception_s", "cnn_s", "planning_s", "wall_s", "cpu_s", "sim_s")
 """Per-pick timings whose medians the report shows."""
 PICK_COLUMNS = ("part", "trial", "pile_seed", "method", "result", "failure", "outcome",
-                "lifted", "width", "rank", "p_not_tangled", "rejected", "u", "v", "angle_deg",
+                "lifted", "width", "rank", "p_model", "rejected", "u", "v", "angle_deg",
                 "score", *TIMINGS, "execution_s", "depth_digest", "reason")
 
 

@@ -188,7 +188,7 @@ def pick_row(method: str, record: PickRecord | None, extra: dict) -> dict:
         candidate = record.candidate
         row.update(
             outcome=record.outcome.name, reason=record.reason, lifted=record.lifted,
-            width=record.width, rank=record.rank, p_not_tangled=record.p_not_tangled,
+            width=record.width, rank=record.rank, p_model=record.p_model,
             rejected=len(record.rejected), perception_s=record.perception_s,
             cnn_s=record.cnn_s, planning_s=record.planning_s, execution_s=record.execution_s,
             candidate=None if candidate is None else {

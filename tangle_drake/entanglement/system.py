@@ -89,15 +89,18 @@ class EntanglementMapSystem(LeafSystem):
         depth = np.asarray(self.GetInputPort("depth_image").Eval(context).data)[:, :, 0]
         emap = entanglement_map(depth, self._roi, self._params)
         entanglement = emap.at([c.u for c in candidates], [c.v for c in candidates])
-        p = None
+        p, name = None, None
         if needs_model(self._rule):
             cnn = self.GetInputPort("cnn_scored")
             if not cnn.HasValue(context):
                 raise TangleDrakeError(f"rule {self._rule!r} needs the tangle CNN: connect a "
                                        "TangleCnnSystem's scored_candidates to cnn_scored")
-            by_pose = {_pose(s.candidate): s.p_not_tangled for s in cnn.Eval(context)}
+            scored_by_cnn = cnn.Eval(context)
+            by_pose = {_pose(s.candidate): s.p_model for s in scored_by_cnn}
             p = np.array([by_pose[_pose(c)] for c in candidates], dtype=np.float64)
-        scored = rank_candidates(self._rule, candidates, p, entanglement=entanglement)
+            name = next((s.p_model_name for s in scored_by_cnn), None)
+        scored = rank_candidates(self._rule, candidates, p, entanglement=entanglement,
+                                 p_model_name=name)
         value.set_value(_Result(emap, scored, scored[0].candidate if scored else None))
 
 

@@ -19,6 +19,7 @@ import numpy as np
 from tangle_drake.failures import FailureKind
 from tangle_drake.pick.outcome import PickRecord, Rejection
 from tangle_drake.planning.motion import Motion, PickMotion, PlanningError
+from tangle_drake.tangle_cnn.selection import ScoredCandidate
 
 
 @dataclass(frozen=True)
@@ -46,27 +47,27 @@ class RepeatRule:
                    and abs(float(candidate.depth_m) - e.depth_m) < self.depth for e in empty)
 
 
-def rank_scored(scored: list[Any], selected: Any = None) -> list[tuple[Any, float | None]]:
-    """``(candidate, P(not tangled))`` in the selection's order (``scored_candidates`` are
-    best first, :func:`~tangle_drake.tangle_cnn.selection.rank`), with ``selected`` at the
-    front."""
-    ranked = [(s.candidate, s.p_not_tangled) for s in scored]
-    if selected is not None:
-        key = (selected.u, selected.v, selected.angle_deg)
-        front = [item for item in ranked if (item[0].u, item[0].v, item[0].angle_deg) == key]
-        ranked = front + [item for item in ranked if item not in front]
-    return ranked
+def rank_scored(scored: list[ScoredCandidate],
+                selected: Any = None) -> list[ScoredCandidate]:
+    """``scored`` in the selection's order (``scored_candidates`` are best first,
+    :func:`~tangle_drake.tangle_cnn.selection.rank`), with ``selected`` at the front."""
+    if selected is None:
+        return list(scored)
+    key = (selected.u, selected.v, selected.angle_deg)
+    front = [s for s in scored if (s.candidate.u, s.candidate.v, s.candidate.angle_deg) == key]
+    return front + [s for s in scored if s not in front]
 
 
-def choose(record: PickRecord, ranked: list[tuple[Any, float | None]], motion: Motion,
+def choose(record: PickRecord, ranked: list[ScoredCandidate], motion: Motion,
            measured: np.ndarray, empty: Sequence[EmptyGrasp], rule: RepeatRule,
            tips_above: float | None = None) -> PickMotion | None:
     """Plan the first candidate of ``ranked`` that can be done (its lift taking the fingertips
-    up to ``tips_above``, where given); fills ``record``'s candidate, rank, P(not tangled),
+    up to ``tips_above``, where given); fills ``record``'s candidate, rank, the model's probability,
     rejections and planning time. ``None`` if none can."""
     start = time.perf_counter()
     plan = None
-    for rank, (candidate, p_not_tangled) in enumerate(ranked):
+    for rank, scored in enumerate(ranked):
+        candidate = scored.candidate
         if candidate.pose is None:
             record.rejected.append(Rejection(rank, FailureKind.NO_POSE,
                                              "the candidate has no X_WT"))
@@ -80,7 +81,8 @@ def choose(record: PickRecord, ranked: list[tuple[Any, float | None]], motion: M
         except PlanningError as error:
             record.rejected.append(Rejection(rank, error.kind, error.detail))
             continue
-        record.candidate, record.rank, record.p_not_tangled = candidate, rank, p_not_tangled
+        record.candidate, record.rank = candidate, rank
+        record.p_model, record.p_model_name = scored.p_model, scored.p_model_name
         break
     record.planning_s = time.perf_counter() - start
     return plan

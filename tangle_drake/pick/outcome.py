@@ -69,7 +69,8 @@ class PickView:
     """The top camera's depth image the grasp was chosen on, metres."""
     ranked: list
     """The first :data:`VIEW_CANDIDATES` ``ScoredCandidate`` in the rule's order (best
-    first): each candidate, its P(not tangled) (``None`` without a CNN) and the rule's score."""
+    first): each candidate, the model's probability (``None`` without one) and the rule's
+    score."""
 
 
 @dataclass
@@ -87,8 +88,10 @@ class PickRecord:
     """The grasp candidate tried (a ``GraspCandidate``), ``None`` if none was."""
     rank: int | None = None
     """The tried candidate's place in the selection's order."""
-    p_not_tangled: float | None = None
-    """The CNN's estimate for the tried candidate, where a CNN ran."""
+    p_model: float | None = None
+    """The model's probability for the tried candidate, where a model ran."""
+    p_model_name: str | None = None
+    """What ``p_model`` is the probability of (``P(not tangled)``, ``P(success)``, ...)."""
     rejected: list[Rejection] = field(default_factory=list)
     width: float | None = None
     """Gripper opening measured after the lift, m."""
@@ -139,7 +142,7 @@ class PickRecord:
                 what += f" ({self.lifted})"
         tried = ""
         if self.candidate is not None:
-            p = "" if self.p_not_tangled is None else f", P(not tangled) {self.p_not_tangled:.2f}"
+            p = "" if self.p_model is None else f", {self.p_model_name} {self.p_model:.2f}"
             rejected = f", {len(self.rejected)} rejected before" if self.rejected else ""
             tried = (f" | candidate #{self.rank} (graspability {self.candidate.score:.2f}{p}"
                      f"{rejected})")

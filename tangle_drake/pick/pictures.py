@@ -3,7 +3,7 @@ were ranked, which one was chosen, and what came up.
 
 Each picture holds, left, the top camera's depth view with the rule's first candidates drawn
 (the hands of graspability's overlay) and the chosen one marked by a cyan dot and ring at its
-centre, above a table of their scores (graspability, P(not tangled), the rule's); right, the
+centre, above a table of their scores (graspability, the model's P, the rule's); right, the
 side view at the top of the lift (the scenario's first view camera, in simulation, cut out
 around the gripper), captioned with the outcome, above the tangle CNN's crop of the chosen
 grasp and its target mask. On hardware, where there is no side view, that panel shows the
@@ -92,9 +92,10 @@ def pick_picture(record: PickRecord, intrinsics: CameraIntrinsics,
         cv2.circle(top, centre, 14, CHOSEN, 2, cv2.LINE_AA)
         cv2.circle(top, centre, 4, CHOSEN, -1)
     picture[:height, :width] = top
-    _text(picture, "rank  graspability  P(not tangled)  rule's score", (8, height + _LINE))
+    name = next((s.p_model_name for s in record.view.ranked if s.p_model_name), "model")
+    _text(picture, f"rank  graspability  {name:<14}  rule's score", (8, height + _LINE))
     for rank, scored in enumerate(record.view.ranked):
-        p = "   -  " if scored.p_not_tangled is None else f"{scored.p_not_tangled:5.2f} "
+        p = "   -  " if scored.p_model is None else f"{scored.p_model:5.2f} "
         mark = "  <- chosen" if chosen is not None and scored.candidate is chosen else ""
         _text(picture, f"#{rank + 1}      {scored.candidate.score:5.2f}          {p}"
                        f"          {scored.score:5.2f}{mark}",

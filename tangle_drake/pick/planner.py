@@ -90,7 +90,6 @@ from __future__ import annotations
 import time
 from collections import Counter
 from dataclasses import replace
-from typing import Any
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -361,8 +360,8 @@ class PickPlanner(ClosedLoop, LeafSystem):
         start = time.perf_counter()
         candidates = list(self._candidates.Eval(context))
         record.perception_s = time.perf_counter() - start
-        ranked: list[tuple[Any, float | None]] = [(c, None) for c in candidates]
         scored = [ScoredCandidate(c, None, float(c.score)) for c in candidates]
+        ranked = scored
         start = time.perf_counter()  # HasValue evaluates a connected port: the CNN runs here
         if self._scored.HasValue(context):
             selected = self._selected.Eval(context) if self._selected.HasValue(context) else None

@@ -66,10 +66,14 @@ class ScoredCandidate(NamedTuple):
     """A candidate with what the selection made of it (the planner reads the three fields)."""
 
     candidate: Any
-    p_not_tangled: float | None
-    """The CNN's estimate; ``None`` where no CNN ran."""
+    p_model: float | None
+    """The model's probability of its good outcome (:attr:`p_model_name`); ``None`` where no
+    model ran."""
     score: float
     """The rule's combined score."""
+    p_model_name: str | None = None
+    """What ``p_model`` is the probability of, for people: ``P(not tangled)`` from a tangle
+    CNN, ``P(success)`` or ``P(one part)`` from a pick model."""
 
 
 def check_rule(rule: str) -> str:
@@ -105,27 +109,27 @@ def random_draw(poses: np.ndarray, seed: int) -> int | None:
     return int(rng.integers(len(top)))
 
 
-def rank(rule: str, graspability: np.ndarray, p_not_tangled: np.ndarray | None = None,
+def rank(rule: str, graspability: np.ndarray, p_model: np.ndarray | None = None,
          poses: np.ndarray | None = None, seed: int = 0,
          entanglement: np.ndarray | None = None) -> Ranking:
     """Every candidate in the order ``rule`` prefers them, and their combined scores.
 
     ``graspability`` (N,) are non-negative index scores in the candidates' order (best
-    first), ``p_not_tangled`` (N,) the CNN's probabilities (``None`` without a CNN: only
+    first), ``p_model`` (N,) the model's probabilities (``None`` without one: only
     ``random``, ``graspability`` and ``emap`` then), ``poses`` (N, 3) the candidates' u, v and
     angle, ``seed`` the draw of ``random`` and ``entanglement`` (N,) the map's values in
     [0, 1] at the candidates (the ``emap`` rules only).
     """
     check_rule(rule)
     g = np.asarray(graspability, dtype=np.float64)
-    if p_not_tangled is None:
+    if p_model is None:
         if needs_model(rule):
             raise ValueError(f"the {rule} rule needs {rule_objective(rule).probability}")
         p = np.zeros_like(g)
     else:
-        p = np.asarray(p_not_tangled, dtype=np.float64)
+        p = np.asarray(p_model, dtype=np.float64)
     if g.ndim != 1 or g.shape != p.shape:
-        raise ValueError(f"graspability {g.shape} and P(not tangled) {p.shape} must be two "
+        raise ValueError(f"graspability {g.shape} and the model's {p.shape} must be two "
                          "equally long vectors")
     if not (np.isfinite(g).all() and np.isfinite(p).all()) or (g < 0).any():
         raise ValueError("graspability must be finite and non-negative, probabilities finite")
@@ -177,15 +181,17 @@ def _random(g: np.ndarray, p: np.ndarray, poses: np.ndarray, seed: int) -> Ranki
 
 
 def rank_candidates(rule: str, candidates: Sequence[Any],
-                    p_not_tangled: np.ndarray | None = None,
-                    seed: int = 0, entanglement: np.ndarray | None = None
-                    ) -> list[ScoredCandidate]:
+                    p_model: np.ndarray | None = None,
+                    seed: int = 0, entanglement: np.ndarray | None = None,
+                    p_model_name: str | None = None) -> list[ScoredCandidate]:
     """``candidates`` (with ``score``, ``u``, ``v``, ``angle_deg``) as :func:`rank` orders
-    them, best first, each with its P(not tangled) and combined score."""
+    them, best first, each with the model's probability (named ``p_model_name``) and the
+    combined score."""
     g = np.array([c.score for c in candidates], dtype=np.float64)
     poses = np.array([(c.u, c.v, c.angle_deg) for c in candidates], dtype=np.float64)
-    ranking = rank(rule, g, p_not_tangled, poses.reshape(len(candidates), 3), seed,
+    ranking = rank(rule, g, p_model, poses.reshape(len(candidates), 3), seed,
                    entanglement)
     return [ScoredCandidate(candidates[i],
-                            None if p_not_tangled is None else float(p_not_tangled[i]),
-                            float(ranking.scores[i])) for i in ranking.order]
+                            None if p_model is None else float(p_model[i]),
+                            float(ranking.scores[i]),
+                            None if p_model is None else p_model_name) for i in ranking.order]

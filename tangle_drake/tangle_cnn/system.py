@@ -6,7 +6,8 @@ port                      dir    value
 ``depth_image``           in     ``ImageDepth32F``, metres (``camera.depth_image``)
 ``candidates``            in     list of grasp candidates (``u, v, angle_deg, width_m,
                                  depth_m, score, X_WT``; graspability's top-k)
-``scored_candidates``     out    list of ``ScoredCandidate(candidate, p_not_tangled, score)``
+``scored_candidates``     out    list of ``ScoredCandidate(candidate, p_model, score,
+                                 p_model_name)``
                                  in the rule's order, best first (``selection.rank``)
 ``selected_grasp``        out    the chosen candidate (the first), or ``None`` when there is
                                  none
@@ -80,5 +81,6 @@ class TangleCnnSystem(LeafSystem):
         candidates: Sequence[Any] = list(self.get_input_port(1).Eval(context))
         depth = np.asarray(self.get_input_port(0).Eval(context).data)[:, :, 0]
         p = self._model.predict_candidates(depth, self._intrinsics, candidates)
-        scored = rank_candidates(self._rule, candidates, p, self._seed)
+        scored = rank_candidates(self._rule, candidates, p, self._seed,
+                                 p_model_name=self._model.objective.probability)
         value.set_value(_Result(scored, scored[0].candidate if scored else None))
