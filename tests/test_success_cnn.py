@@ -139,7 +139,14 @@ def test_evaluation_breaks_a_success_model_down_by_outcome(models, picks, tmp_pa
     three = evaluate_model(load_tangle_model(models["outcome"]), picks)
     assert three.classes == ("one part", "several parts", "no part")
     assert three.class_accuracy > 0.8 and len(three.class_recall) == 3
-    assert sum(three.class_samples) == three.samples  # its validation piles, balanced
+    # Its own data: the validation piles, every sample (its loss was weighted by class, not
+    # undersampled), so the prior correction applies.
+    assert three.scope == "the model's validation piles (this is its training data)"
+    assert three.samples == read_checkpoint(models["outcome"])["data"]["validation_samples"]
+    assert three.prior_corrected and sum(three.class_samples) == three.samples
+    info = read_checkpoint(models["outcome"])
+    assert info["training"]["balance"] == "weight"
+    assert info["data"]["train_samples"] + info["data"]["validation_samples"] == 256
     fresh = tmp_path / "fresh"
     write_synthetic_dataset(fresh, 60, seed=4, outcomes=True)
     three = evaluate_model(load_tangle_model(models["outcome"]), fresh)

@@ -16,7 +16,7 @@ from tangle_drake.tangle_cnn.augment import augment_batch, dihedral
 from tangle_drake.tangle_cnn.metrics import binary_metrics, roc_auc
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet, parameter_count
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION, Normalisation
-from tangle_drake.tangle_cnn.split import split_by_pile, undersample
+from tangle_drake.tangle_cnn.split import balanced_rows, loss_weights, split_by_pile, undersample
 from tangle_drake.tangle_cnn.target_mask import TargetMask
 
 
@@ -44,6 +44,26 @@ def test_undersample_balances_the_classes_within_the_given_indices():
     kept = undersample(np.arange(1, 10), labels, seed=0)
     assert np.bincount(labels[kept]).tolist() == [2, 2]
     assert set(kept) <= set(range(1, 10)) and list(kept) == sorted(kept)
+
+
+def test_weight_balance_keeps_every_sample_and_weighs_each_class_as_much():
+    labels = np.array([2, 0, 0, 0, 0, 1, 0, 0, 1, 0])
+    kept = balanced_rows(np.array([9, 0, 1, 2, 3, 4, 5, 6, 7, 8]), labels, 0, 3, "weight")
+    assert kept.tolist() == list(range(10))
+    weights = loss_weights(labels[kept], 3)  # each class weighs a third of the ten samples
+    assert np.allclose([weights[k] * (labels[kept] == k).sum() for k in range(3)], 10 / 3)
+    undersampled = balanced_rows(np.arange(10), labels, 0, 3, "undersample")
+    assert np.bincount(labels[undersampled]).tolist() == [1, 1, 1]  # as many as the rarest
+
+
+def test_each_objective_trains_with_its_balance_unless_told():
+    from tangle_drake.tangle_cnn.train_settings import TrainSettings
+
+    assert TrainSettings().balance == "undersample"  # the paper's tangle CNN
+    assert TrainSettings(objective="outcome").balance == "weight"
+    assert TrainSettings(objective="success", balance="undersample").balance == "undersample"
+    with pytest.raises(TangleDrakeError, match="unknown balance 'even'"):
+        TrainSettings(balance="even")
 
 
 def test_augmentation_makes_the_eight_symmetries_of_the_square():

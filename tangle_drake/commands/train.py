@@ -11,7 +11,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "train", help="train the tangle CNN on a dataset from `tangle-drake collect`",
         description="Train the tangle CNN: 90/10 split by pile, classes balanced by "
-                    "undersampling the majority class, x8 rotation/flip augmentation, early "
+                    "undersampling the majority class (a pick model's --objective weights "
+                    "its loss by class instead: --balance), x8 rotation/flip augmentation, early "
                     "stopping on the validation loss. The network sees the depth crop and a "
                     "mask of the target part's pixels (--no-target-mask: the crop alone, as "
                     "in the paper). Writes OUT (best weights and the "
@@ -21,6 +22,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--data", type=Path, required=True, help="dataset directory")
     parser.add_argument("--out", type=Path, required=True, help="checkpoint to write (.pt)")
     from tangle_drake.tangle_cnn.objectives import OBJECTIVES
+    from tangle_drake.tangle_cnn.split import BALANCES
     from tangle_drake.tangle_cnn.train_settings import AUGMENTATIONS, TrainSettings
 
     default = TrainSettings()
@@ -49,6 +51,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "P(success) with the success-cnn rule; outcome: three classes "
                              "(one part, several, none) from the same data, picking with "
                              "success-harmonic (graspability and P(one part))")
+    parser.add_argument("--balance", choices=BALANCES, default=None,
+                        help="how the classes are evened out: undersample (the paper's: as "
+                             "many of each class as the rarest has; the tangle CNN's default) "
+                             "or weight (every sample, each class's loss weighted by the "
+                             "inverse of its share; the pick models' default, whose rarest "
+                             "class is a few dozen picks)")
     parser.add_argument("--device", choices=("auto", "cpu", "cuda"), default="auto",
                         help="auto: CUDA when available, else the CPU")
     parser.add_argument("--restart", action="store_true",
@@ -63,7 +71,8 @@ def run(args: argparse.Namespace) -> int:
 
     settings = TrainSettings(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
                              seed=args.seed, patience=args.patience, augment=args.augment,
-                             target_mask=args.target_mask, objective=args.objective)
+                             target_mask=args.target_mask, objective=args.objective,
+                             balance=args.balance)
     try:
         metrics = train(args.data, args.out, settings, device=args.device,
                         restart=args.restart, log=tqdm.write)

@@ -27,7 +27,7 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.metrics import balanced_accuracy, binary_metrics, class_metrics
 from tangle_drake.tangle_cnn.model import TangleModel
 from tangle_drake.tangle_cnn.objectives import TANGLED
-from tangle_drake.tangle_cnn.split import split_by_pile, undersample
+from tangle_drake.tangle_cnn.split import balanced_rows, split_by_pile
 from tangle_drake.tangle_cnn.training_data import fingerprint, load_checked_samples
 
 CAUSE_FIELDS = ("num_in_region", "num_hanging", "num_riding", "max_rise_m")
@@ -161,8 +161,8 @@ def evaluate_model(model: TangleModel, directory: Path,
     samples, crop, manifest = load_checked_samples(directory, causes, objective)
     labels = samples["label"].astype(np.int64)
     _check_crop(model.crop, crop, directory)
-    rows, scope = _scored_rows(model, samples, labels, len(objective.classes))
-    corrected = model.class_weights is not None and scope == ALL_SAMPLES
+    rows, scope, balanced = _scored_rows(model, samples, labels, len(objective.classes))
+    corrected = model.class_weights is not None and not balanced
     probabilities = class_probabilities(model, samples, rows, progress, balanced=not corrected)
     # P(not the good class), as float32 arithmetic then float64, as it always was.
     p_tangled = (1.0 - probabilities[:, 0].astype(np.float32)).astype(np.float64)
@@ -198,18 +198,21 @@ def _check_crop(model_crop: CropSpec, data_crop: CropSpec, directory: Path) -> N
 
 
 def _scored_rows(model: TangleModel, samples: dict[str, np.ndarray],
-                 labels: np.ndarray, classes: int) -> tuple[np.ndarray, str]:
-    """All rows, or the balanced validation rows when this is the model's training data."""
+                 labels: np.ndarray, classes: int) -> tuple[np.ndarray, str, bool]:
+    """All rows, or the validation rows as training chose them when this is the model's
+    training data; and whether their classes were undersampled to equal shares."""
     data = model.info.get("data") or {}
     training = model.info.get("training") or {}
     if data.get("fingerprint") != fingerprint(samples):
-        return np.arange(len(labels)), ALL_SAMPLES
+        return np.arange(len(labels)), ALL_SAMPLES, False
     seed = int(training.get("seed", 0))
+    balance = training.get("balance") or "undersample"  # checkpoints made before ``weight``
     _, validation = split_by_pile(samples["pile_seed"],
                                   float(training.get("validation_fraction", 0.1)), seed)
-    return (undersample(validation, labels, seed, classes),
-            "the model's validation piles (this is its training data), classes balanced as in "
-            "training")
+    undersampled = balance == "undersample"
+    return (balanced_rows(validation, labels, seed, classes, balance),
+            "the model's validation piles (this is its training data)" +
+            (", classes balanced as in training" if undersampled else ""), undersampled)
 
 
 def _outcome_groups(samples: dict[str, np.ndarray], rows: np.ndarray, truth: np.ndarray,

@@ -37,6 +37,8 @@ class Objective:
     """Field value -> class; other values (-1: no label) are left out."""
     data: str
     """How to make data with this field, for error messages."""
+    balance: str = "undersample"
+    """How ``train`` evens out its classes unless told (``split.BALANCES``)."""
     prior_corrected: bool = False
     """Whether the model's probabilities are moved back from the equal class shares it trained
     on (``split.undersample``) to its data's own shares (:func:`prior_weights`). A pick model's
@@ -69,9 +71,9 @@ TANGLED = Objective("tangled", ("not tangled", "tangled"), "label", {0: 0, 1: 1}
                     "`tangle-drake collect` (either --label)")
 _PICKS = "`tangle-drake collect --label pick` (or a pick log)"
 SUCCESS = Objective("success", ("success", "failure"), "outcome", {1: 0, 2: 1, 0: 1}, _PICKS,
-                    prior_corrected=True)
+                    balance="weight", prior_corrected=True)
 OUTCOME = Objective("outcome", ("one part", "several parts", "no part"), "outcome",
-                    {1: 0, 2: 1, 0: 2}, _PICKS, prior_corrected=True)
+                    {1: 0, 2: 1, 0: 2}, _PICKS, balance="weight", prior_corrected=True)
 OBJECTIVES = {o.name: o for o in (TANGLED, SUCCESS, OUTCOME)}
 DEFAULT_OBJECTIVE = TANGLED.name
 

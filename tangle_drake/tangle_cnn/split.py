@@ -1,4 +1,4 @@
-"""Train/validation split by pile, and the class balance the paper trained with.
+"""Train/validation split by pile, and how training evens out its classes.
 
 Samples of one pile share its parts and their poses, so a pile split between training and
 validation would leak: the split is by ``pile_seed``, never by sample. Both steps are
@@ -39,3 +39,26 @@ def undersample(indices: np.ndarray, labels: np.ndarray, seed: int,
     keep = min(len(members) for members in by_class)
     return np.sort(np.concatenate([rng.choice(members, keep, replace=False)
                                    for members in by_class]))
+
+
+BALANCES = ("undersample", "weight")
+"""How training evens out its classes: ``undersample``, the paper's (as many samples of each
+class as the rarest has, :func:`undersample`), or ``weight`` (every sample, each class's loss
+weighted by the inverse of its share, :func:`loss_weights`: nothing is thrown away, which
+matters where the rarest class is a few dozen picks)."""
+
+
+def balanced_rows(indices: np.ndarray, labels: np.ndarray, seed: int, classes: int,
+                  balance: str) -> np.ndarray:
+    """The rows of ``indices`` that ``balance`` trains or validates on (sorted)."""
+    if balance == "undersample":
+        return undersample(indices, labels, seed, classes)
+    return np.sort(indices)
+
+
+def loss_weights(labels: np.ndarray, classes: int) -> np.ndarray:
+    """Each class's weight in a ``weight``-balanced loss, ``n / (classes * n_class)``: every
+    class then weighs as much in the loss as under undersampling, so the network's output is
+    the same balanced estimate (and the prior correction the same)."""
+    counts = np.bincount(labels, minlength=classes).astype(np.float64)
+    return len(labels) / (classes * counts)

@@ -85,7 +85,7 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
     objective = objective_named(settings.objective)
     data = load_training_data(data_dir, normalisation, settings.validation_fraction,
                               settings.seed, target_mask=settings.target_mask,
-                              objective=objective)
+                              objective=objective, balance=settings.balance)
     normalisation = data.normalisation
     config = network or NetworkConfig(input_size=data.crop.size_px,
                                       input_channels=normalisation.channels,
@@ -127,7 +127,8 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
         epoch = state["epoch"] + 1
         start = time.perf_counter()
         train_loss, train_accuracy = _run_epoch(net, optimiser, data, settings, epoch, dev)
-        val_loss, probabilities = evaluate(net, data.inputs, data.labels, data.validation, dev)
+        val_loss, probabilities = evaluate(net, data.inputs, data.labels, data.validation, dev,
+                                           data.loss_weights)
         record = {"epoch": epoch, "train_loss": train_loss, "train_accuracy": train_accuracy,
                   "val_loss": val_loss,
                   **{f"val_{k}": v for k, v in
@@ -182,6 +183,7 @@ def _run_epoch(net: TangleNet, optimiser: torch.optim.Optimizer, data: TrainingD
     rng = np.random.default_rng((settings.seed, epoch))
     torch.manual_seed(int(rng.integers(2**62)))
     transforms = AUGMENTATIONS[settings.augment]
+    weights = None if data.loss_weights is None else data.loss_weights.to(dev)
     order = rng.permutation(len(data.train) * transforms)
     net.train()
     total_loss, correct = 0.0, 0
@@ -194,7 +196,7 @@ def _run_epoch(net: TangleNet, optimiser: torch.optim.Optimizer, data: TrainingD
             x = augment_batch(data.inputs[torch.from_numpy(rows)], pairs % transforms)
             y = torch.from_numpy(data.labels[rows]).to(dev)
             logits = net(x.to(dev))
-            loss = nn.functional.cross_entropy(logits, y)
+            loss = nn.functional.cross_entropy(logits, y, weight=weights)
             optimiser.zero_grad()
             loss.backward()
             optimiser.step()
@@ -205,19 +207,24 @@ def _run_epoch(net: TangleNet, optimiser: torch.optim.Optimizer, data: TrainingD
 
 
 def evaluate(net: TangleNet, inputs: torch.Tensor, labels: np.ndarray, indices: np.ndarray,
-             dev: torch.device) -> tuple[float, np.ndarray]:
-    """Mean cross-entropy and the class probabilities, (N, classes), of the samples
-    ``indices`` (eval mode, no dropout)."""
+             dev: torch.device, loss_weights: torch.Tensor | None = None
+             ) -> tuple[float, np.ndarray]:
+    """Mean cross-entropy (weighted by class as in training, where ``loss_weights`` are
+    given) and the class probabilities, (N, classes), of the samples ``indices`` (eval mode,
+    no dropout)."""
     net.eval()
-    total_loss, probabilities = 0.0, []
+    weights = None if loss_weights is None else loss_weights.to(dev)
+    total_loss, total_weight, probabilities = 0.0, 0.0, []
     with torch.inference_mode():
         for first in range(0, len(indices), EVAL_BATCH):
             rows = torch.from_numpy(indices[first:first + EVAL_BATCH])
             logits = net(inputs[rows].to(dev))
             y = torch.from_numpy(labels[rows.numpy()]).to(dev)
-            total_loss += float(nn.functional.cross_entropy(logits, y, reduction="sum"))
+            total_loss += float(nn.functional.cross_entropy(logits, y, weight=weights,
+                                                            reduction="sum"))
+            total_weight += len(rows) if weights is None else float(weights[y].sum())
             probabilities.append(torch.softmax(logits, 1).cpu().numpy())
-    return total_loss / len(indices), np.concatenate(probabilities)
+    return total_loss / total_weight, np.concatenate(probabilities)
 
 
 def _save(out: Path, state: dict, data: TrainingData, settings: TrainSettings,

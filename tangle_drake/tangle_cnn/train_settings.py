@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.objectives import DEFAULT_OBJECTIVE, objective_named
+from tangle_drake.tangle_cnn.split import BALANCES
 
 TRAIN_THREADS = 1
 """Torch threads of the runs that make models to keep (the shipped ones, ``teach``'s): another
@@ -38,6 +39,9 @@ class TrainSettings:
     objective: str = DEFAULT_OBJECTIVE
     """What the model learns to predict (:mod:`.objectives`): ``tangled``, the paper's tangle
     CNN, or ``success``, the seed's success/failure baseline (from physical picks)."""
+    balance: str | None = None
+    """How the classes are evened out (``split.BALANCES``); ``None``: the objective's way
+    (``Objective.balance``), set when the settings are made."""
 
     def __post_init__(self) -> None:
         if self.augment not in AUGMENTATIONS:
@@ -49,4 +53,9 @@ class TrainSettings:
             raise TangleDrakeError(f"the learning rate must be positive, got {self.lr}")
         if not 0 < self.validation_fraction < 1:
             raise TangleDrakeError("the validation fraction must be between 0 and 1")
-        objective_named(self.objective)
+        objective = objective_named(self.objective)
+        if self.balance is None:
+            object.__setattr__(self, "balance", objective.balance)
+        if self.balance not in BALANCES:
+            raise TangleDrakeError(f"unknown balance {self.balance!r}; choose one of "
+                                   f"{', '.join(BALANCES)}")

@@ -21,7 +21,7 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.tangle_cnn.normalise import Normalisation
 from tangle_drake.tangle_cnn.objectives import TANGLED, Objective
-from tangle_drake.tangle_cnn.split import split_by_pile, undersample
+from tangle_drake.tangle_cnn.split import balanced_rows, loss_weights, split_by_pile
 from tangle_drake.tangle_cnn.target_mask import TargetMask
 
 FIELDS = ("crop", "label", "depth_m", "pile_seed")
@@ -36,9 +36,9 @@ class TrainingData:
     labels: np.ndarray
     """(N,) int64, the objective's classes: 1 = tangled (or failure), 0 = the good outcome."""
     train: np.ndarray
-    """Indices of the training part (whole piles, classes balanced)."""
+    """Indices of the training part (whole piles; classes undersampled, or all of them)."""
     validation: np.ndarray
-    """Indices of the validation part (the other piles, classes balanced)."""
+    """Indices of the validation part (the other piles, chosen the same way)."""
     crop: CropSpec
     normalisation: Normalisation
     """The normalisation the inputs were made with (its target mask fitted to the data's
@@ -47,6 +47,9 @@ class TrainingData:
     part: str | None
     summary: dict
     """Path, content fingerprint, counts and the manifest: stored in the checkpoint."""
+    loss_weights: torch.Tensor | None = None
+    """Each class's weight in the loss (``weight`` balance, from the training part's counts);
+    ``None``: the classes were undersampled."""
 
 
 def load_checked_samples(directory: Path, extra_fields: tuple[str, ...] = (),
@@ -89,11 +92,12 @@ def load_checked_samples(directory: Path, extra_fields: tuple[str, ...] = (),
 
 def load_training_data(directory: Path, normalisation: Normalisation,
                        validation_fraction: float, seed: int,
-                       target_mask: bool = False, objective: Objective = TANGLED) -> TrainingData:
-    """Load ``directory``'s labels for ``objective``, split it by pile with ``seed`` and
-    undersample each part's classes; ``target_mask`` alone decides whether the inputs get the
-    target-mask channel (fitted to the data's hand and crop), whatever mask ``normalisation``
-    held."""
+                       target_mask: bool = False, objective: Objective = TANGLED,
+                       balance: str = "undersample") -> TrainingData:
+    """Load ``directory``'s labels for ``objective``, split it by pile with ``seed`` and even
+    out each part's classes as ``balance`` says (``split.BALANCES``); ``target_mask`` alone
+    decides whether the inputs get the target-mask channel (fitted to the data's hand and
+    crop), whatever mask ``normalisation`` held."""
     directory = Path(directory)
     samples, crop, manifest = load_checked_samples(directory, objective=objective)
     crops, labels = samples["crop"], samples["label"].astype(np.int64)
@@ -110,10 +114,10 @@ def load_training_data(directory: Path, normalisation: Normalisation,
     except ValueError:
         raise TangleDrakeError(f"dataset {directory} holds a single pile; a split by pile "
                                "needs two or more") from None
-    train = undersample(train_all, labels, seed, classes)
-    validation = undersample(validation_all, labels, seed, classes)
+    train = balanced_rows(train_all, labels, seed, classes, balance)
+    validation = balanced_rows(validation_all, labels, seed, classes, balance)
     for name, part in (("training", train), ("validation", validation)):
-        if len(part) == 0:
+        if len(np.unique(labels[part])) < classes:
             raise TangleDrakeError(f"dataset {directory}: the {name} piles lack a class; "
                                    "collect more piles")
     gripper = manifest.get("gripper", asdict(DEFAULT_GRIPPER))
@@ -138,6 +142,8 @@ def load_training_data(directory: Path, normalisation: Normalisation,
         inputs=torch.from_numpy(normalisation.inputs(crops, depths)),
         labels=labels, train=train, validation=validation, crop=crop,
         normalisation=normalisation, gripper=gripper, part=manifest.get("part"),
+        loss_weights=(None if balance == "undersample" else
+                      torch.as_tensor(loss_weights(labels[train], classes), dtype=torch.float32)),
         summary=summary)
 
 
