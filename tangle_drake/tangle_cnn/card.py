@@ -15,7 +15,8 @@ from tangle_drake.tangle_cnn.objectives import TANGLED, objective_named
 def validation_header(failure: str = "tangled") -> str:
     """:func:`validation_row`'s header; ``failure`` names the model's class 1 (``failure`` for
     a success/failure model)."""
-    return (f"| part | samples | {failure} % | piles | train / validation samples (balanced) "
+    return (f"| part | samples | {failure} % | piles | train / validation samples (balanced by "
+            f"undersampling, or all of them with the loss weighted by class) "
             f"| epoch chosen | val loss | val accuracy % [95 % interval] | precision % ({failure}) "
             f"| recall % ({failure}) | ROC-AUC | size |\n" + "|---" * 12 + "|")
 
@@ -47,9 +48,11 @@ def validation_row(path: Path) -> str:
     tangled = 100 * failures / data["samples"]
     n = data["validation_samples"]
     low, high = wilson(round(metrics["val_accuracy"] * n), n)
+    weighted = (checkpoint.get("training") or {}).get("balance") == "weight"
     return (f"| {checkpoint['part']} | {data['samples']} | {tangled:.1f} | {data['piles']} "
             f"| {data['train_samples']} / {n} "
-            f"({data['validation_piles']} piles) | {metrics['epoch']} of {metrics['epochs_run']} "
+            f"({data['validation_piles']} piles{', loss weighted' if weighted else ''}) "
+            f"| {metrics['epoch']} of {metrics['epochs_run']} "
             f"| {metrics['val_loss']:.3f} | {pct(metrics.get('val_accuracy'))} [{100 * low:.0f}, "
             f"{100 * high:.0f}] | {pct(metrics.get('val_precision'))} | "
             f"{pct(metrics.get('val_recall'))} | {'n/a' if auc is None else f'{auc:.3f}'} | "
