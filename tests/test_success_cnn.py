@@ -146,6 +146,7 @@ def test_evaluation_breaks_a_success_model_down_by_outcome(models, picks, tmp_pa
     assert three.prior_corrected and sum(three.class_samples) == three.samples
     info = read_checkpoint(models["outcome"])
     assert info["training"]["balance"] == "weight"
+    assert three.accuracy == pytest.approx(info["metrics"]["val_accuracy"])  # scored alike
     assert info["data"]["train_samples"] + info["data"]["validation_samples"] == 256
     fresh = tmp_path / "fresh"
     write_synthetic_dataset(fresh, 60, seed=4, outcomes=True)
@@ -192,6 +193,19 @@ def test_each_model_serves_its_rules_and_is_refused_by_the_others(models):
         parse_method(f"success-cnn:{models['outcome']}.missing")
     with pytest.raises(TangleDrakeError, match="unknown method 'random:"):
         parse_method(f"random:{models['outcome']}")
+
+
+def test_a_weighted_validation_is_scored_at_its_data_s_class_shares():
+    """Kept at the data's shares (80 % one part), the validation is scored as the model will
+    be used: a network that cannot tell then calls every pick one part, right 80 % of the
+    time, where its balanced output (1/3 each) would call every pick a failure."""
+    from tangle_drake.tangle_cnn.train import validation_figures
+
+    labels = np.array([0] * 8 + [1, 2])
+    uniform = np.full((10, 3), 1 / 3, dtype=np.float32)
+    shares = torch.tensor([0.8, 0.1, 0.1])
+    assert validation_figures(labels, uniform, shares)["accuracy"] == pytest.approx(0.8)
+    assert validation_figures(labels, uniform, None)["accuracy"] == pytest.approx(0.2)
 
 
 def test_a_success_cnn_needs_outcomes_in_its_data(lifts, tmp_path):

@@ -23,11 +23,11 @@ cores, two threads took 8 ms where one takes 2-4 ms, and 200 ms whenever another
 physics, a benchmark worker) held the other core, as torch's threads wait on each other."""
 
 
-def class_probabilities(logits: torch.Tensor, weights: torch.Tensor | None) -> torch.Tensor:
-    """The softmax of ``logits`` (N, classes), moved by Bayes' rule to the class shares
-    ``weights`` and renormalised (as it is for ``None``): a pick model's prior correction, the
-    one place for it (:class:`TangleModel` and its ONNX graph)."""
-    probabilities = torch.softmax(logits, dim=1)
+def reweighted(probabilities: torch.Tensor, weights: torch.Tensor | None) -> torch.Tensor:
+    """Class probabilities (N, classes) under equal shares, moved by Bayes' rule to the class
+    shares ``weights`` and renormalised (as they are for ``None``): a pick model's prior
+    correction, the one place for it (:class:`TangleModel`, its ONNX graph, training's
+    validation figures)."""
     if weights is None:
         return probabilities
     weighted = probabilities * weights
@@ -96,8 +96,8 @@ class TangleModel:
         torch.set_num_threads(INFERENCE_THREADS)
         try:
             with torch.inference_mode():
-                probabilities = class_probabilities(
-                    self.network(x), None if balanced else self.class_weights).numpy()
+                probabilities = reweighted(torch.softmax(self.network(x), dim=1),
+                                           None if balanced else self.class_weights).numpy()
         finally:
             torch.set_num_threads(threads)
         return probabilities

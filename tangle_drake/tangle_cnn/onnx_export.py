@@ -24,7 +24,7 @@ import torch
 from torch import nn
 
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.tangle_cnn.model import TangleModel, class_probabilities
+from tangle_drake.tangle_cnn.model import TangleModel, reweighted
 from tangle_drake.tangle_cnn.network import TangleNet
 from tangle_drake.tangle_cnn.normalise import Normalisation
 
@@ -48,7 +48,7 @@ class _ProbabilityGraph(nn.Module):
         return self.probability(self.normalisation.apply(crops, grasp_depths).unsqueeze(1))
 
     def probability(self, x: torch.Tensor) -> torch.Tensor:
-        return class_probabilities(self.network(x), self.class_weights)[:, 0]
+        return reweighted(torch.softmax(self.network(x), dim=1), self.class_weights)[:, 0]
 
 
 class _MaskedProbabilityGraph(_ProbabilityGraph):

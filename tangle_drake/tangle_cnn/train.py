@@ -41,9 +41,10 @@ from tangle_drake.tangle_cnn.checkpoint import (
     save_atomic,
 )
 from tangle_drake.tangle_cnn.metrics import class_metrics, few_samples_warning
+from tangle_drake.tangle_cnn.model import reweighted
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION, Normalisation
-from tangle_drake.tangle_cnn.objectives import objective_named
+from tangle_drake.tangle_cnn.objectives import objective_named, prior_weights
 from tangle_drake.tangle_cnn.train_settings import AUGMENTATIONS, TrainSettings
 from tangle_drake.tangle_cnn.training_data import TrainingData, load_training_data
 
@@ -123,6 +124,10 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
                                       "the validation split", objective.classes):
         log(warning)
 
+    # Validation piles at the data's own class shares (a weighted loss) are scored at them, as
+    # ``evaluate`` scores the model there; undersampled ones by the balanced output.
+    shares = prior_weights(objective, data.summary) if data.loss_weights is not None else None
+    shares = None if shares is None else torch.as_tensor(shares, dtype=torch.float32)
     while not (reason := _stop_reason(state, settings)):
         epoch = state["epoch"] + 1
         start = time.perf_counter()
@@ -131,8 +136,8 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
                                            data.loss_weights)
         record = {"epoch": epoch, "train_loss": train_loss, "train_accuracy": train_accuracy,
                   "val_loss": val_loss,
-                  **{f"val_{k}": v for k, v in
-                     class_metrics(data.labels[data.validation], probabilities).items()},
+                  **{f"val_{k}": v for k, v in validation_figures(
+                      data.labels[data.validation], probabilities, shares).items()},
                   "seconds": round(time.perf_counter() - start, 3)}
         state["history"].append(record)
         best = state["history"][state["best_epoch"] - 1] if state["best_epoch"] else None
@@ -175,6 +180,14 @@ def _resumed_state(out: Path, fixed: dict, fingerprint: str) -> dict:
         raise TangleDrakeError(f"{path} was made with different {', '.join(changed)}; pass "
                                "--restart to start over, or another --out")
     return state
+
+
+def validation_figures(labels: np.ndarray, probabilities: np.ndarray,
+                       shares: torch.Tensor | None) -> dict:
+    """The validation's figures (``metrics.class_metrics``) of balanced ``probabilities``,
+    moved to the class ``shares`` first where the validation samples are at those shares (a
+    weighted loss: every sample kept), as ``evaluate`` scores the model there."""
+    return class_metrics(labels, reweighted(torch.from_numpy(probabilities), shares).numpy())
 
 
 def _run_epoch(net: TangleNet, optimiser: torch.optim.Optimizer, data: TrainingData,
