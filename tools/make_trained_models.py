@@ -290,8 +290,8 @@ OUTCOME_INTRO = """\
 Beyond the paper: the same network and crop, trained with `train --objective outcome` on the
 same physical picks as the success/failure CNN, with three classes: one part, several parts,
 no part. So it tells a tangle from an empty grasp. Its P(one part) serves the same rules as
-the success/failure CNN; `bench --methods model:tangle_drake/trained/PART.outcome.pt` picks
-with the harmonic mean of it and graspability (`success-harmonic`). The validation columns
+the success/failure CNN; `bench --methods outcome` (or `model:tangle_drake/trained/PART.outcome.pt`)
+picks with the harmonic mean of it and graspability (`success-harmonic`). The validation columns
 score P(one part) against the other two classes.\
 """
 
