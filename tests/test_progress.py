@@ -34,11 +34,11 @@ def test_a_collection_reports_its_samples_and_balance(capsys):
 
 
 def test_a_pick_collection_reports_what_came_up(capsys):
-    from tangle_drake.tangle_data.physical import PhysicalPickSimulator
+    from tangle_drake.tangle_data.physical import PICK_SHARES
 
     counts = {"samples": 5, "tangled": 1, "one": 3, "none": 1, "failed": 2}
     progress = CollectProgress("collect s_hook", 20, counts, workers=1, line_interval=0.0,
-                               shares=PhysicalPickSimulator.SHARES)
+                               shares=PICK_SHARES)
     progress.task_done({"samples": 5, "tangled": 0, "one": 4, "none": 1, "failed": 0})
     progress.close()
     out = capsys.readouterr().out

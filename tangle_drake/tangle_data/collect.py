@@ -29,11 +29,12 @@ from tangle_drake.scenario import Scenario
 from tangle_drake.station import camera_model
 from tangle_drake.tangle_data.physical import (
     PICK_SCENARIO,
+    PICK_SHARES,
     PhysicalPickSimulator,
     PickDataSettings,
     pick_data_scenario,
 )
-from tangle_drake.tangle_data.progress import CollectProgress
+from tangle_drake.tangle_data.progress import LIFT_SHARES, CollectProgress
 from tangle_drake.tangle_data.settings import CollectSettings
 from tangle_drake.tangle_data.simulator import TangleDataSimulator, TaskResult, data_scenario
 from tangle_drake.tangle_data.store import DatasetStore
@@ -102,13 +103,15 @@ def collect_picks(settings: PickDataSettings, out: Path, samples: int,
     scenario_mode(scenario, "the pick-data scenario")  # a gripper to pick with, or say so
     settings = replace(settings, parts_per_pile=scenario.pile.total_count)
     return _collect_into(out, settings, scenario, PhysicalPickSimulator, scenario_text,
-                         settings.top_k, samples, workers, ray_address, show_progress)
+                         settings.top_k, samples, workers, ray_address, show_progress,
+                         PICK_SHARES)
 
 
 def _collect_into(out: Path, settings: CollectSettings | PickDataSettings, scenario: Scenario,
                   factory: type, scenario_text: str, per_task: int, samples: int,
                   workers: int | None, ray_address: str | None,
-                  show_progress: bool | None) -> CollectionResult:
+                  show_progress: bool | None,
+                  shares: tuple[tuple[str, str], ...] = LIFT_SHARES) -> CollectionResult:
     """Check the part and its pile, open (or resume) the dataset at ``out`` and run
     ``factory``'s tasks into it."""
     part = load_part(settings.part, mesh_scale=settings.mesh_scale)  # builds the cache once
@@ -119,7 +122,7 @@ def _collect_into(out: Path, settings: CollectSettings | PickDataSettings, scena
         print(f"notice: {notice}", file=sys.stderr)
     try:
         return _run(store, factory, (scenario_text, settings), per_task, settings.seed,
-                    samples, workers, ray_address, part.name, show_progress)
+                    samples, workers, ray_address, part.name, show_progress, shares)
     finally:
         store.close()
 
@@ -133,7 +136,8 @@ def _check_counts(samples: int, workers: int | None) -> None:
 
 def _run(store: DatasetStore, factory: type, args: tuple, per_task: int, seed: int,
          samples: int, workers: int | None, ray_address: str | None, name: str,
-         show_progress: bool | None) -> CollectionResult:
+         show_progress: bool | None,
+         shares: tuple[tuple[str, str], ...] = LIFT_SHARES) -> CollectionResult:
     """Run ``factory(*args)``'s tasks until the store holds ``samples`` (a task makes about
     ``per_task`` before any has finished).
 
@@ -145,7 +149,7 @@ def _run(store: DatasetStore, factory: type, args: tuple, per_task: int, seed: i
         return CollectionResult(store.directory, store.counts(), 0, False, 0.0)
     backend = start_workers(factory, args, workers, ray_address)
     progress = CollectProgress(name, samples, store.counts(), backend.capacity,
-                               show_progress, shares=factory.SHARES)
+                               show_progress, shares=shares)
     pending: dict[Future, int] = {}
     handed_out: collections.deque[int] = collections.deque()  # not yet stored, in order
     early: dict[int, TaskResult] = {}  # finished, waiting for an earlier task

@@ -114,11 +114,13 @@ def pick_data_scenario(scenario_text: str, settings: PickDataSettings) -> Scenar
         PartCount(settings.part, count, settings.mesh_scale)]))
 
 
+PICK_SHARES = (("one", "one part"), ("tangled", "several"), ("none", "none"))
+"""The task counts a pick collection's progress shows as shares of the samples (``tangled``:
+several)."""
+
+
 class PhysicalPickSimulator:
     """Builds the part's pick rig once and runs tasks on it (one per settled pile)."""
-
-    SHARES = (("one", "one part"), ("tangled", "several"), ("none", "none"))
-    """The task counts the progress shows as shares of the samples (``tangled``: several)."""
 
     def __init__(self, scenario_text: str, settings: PickDataSettings) -> None:
         self.settings = settings

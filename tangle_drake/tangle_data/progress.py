@@ -4,6 +4,9 @@ from __future__ import annotations
 
 from tangle_drake.progress import LINE_INTERVAL_S, Progress
 
+LIFT_SHARES = (("tangled", "tangled"),)
+"""The task counts an auto-lift collection's progress shows as shares of the samples."""
+
 
 class CollectProgress:
     """:class:`~tangle_drake.progress.Progress` over the sample target, updated once per
@@ -12,9 +15,10 @@ class CollectProgress:
 
     def __init__(self, description: str, target: int, counts: dict, workers: int,
                  enabled: bool | None = None, line_interval: float = LINE_INTERVAL_S,
-                 shares: tuple[tuple[str, str], ...] = (("tangled", "tangled"),)) -> None:
+                 shares: tuple[tuple[str, str], ...] = LIFT_SHARES) -> None:
         """``shares``: ``(count, words)`` of the task counts shown as shares of the samples
-        (the auto-lift's tangled; a physical pick's one part, several, none)."""
+        (the auto-lift's tangled; a physical pick's one part, several, none:
+        ``physical.PICK_SHARES``)."""
         self.samples = counts["samples"]
         self.shares = shares
         self.counted = {key: counts.get(key, 0) for key, _ in shares}

@@ -56,9 +56,6 @@ def data_scenario(scenario_text: str, settings: CollectSettings) -> Scenario:
 class TangleDataSimulator:
     """Builds the robot-less station once and runs tasks on it (one per settled pile)."""
 
-    SHARES = (("tangled", "tangled"),)
-    """The task counts the progress shows as shares of the samples."""
-
     def __init__(self, scenario_text: str, settings: CollectSettings) -> None:
         self.settings = settings
         self.scenario = data_scenario(scenario_text, settings)
