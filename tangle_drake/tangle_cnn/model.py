@@ -34,6 +34,13 @@ def reweighted(probabilities: torch.Tensor, weights: torch.Tensor | None) -> tor
     return weighted / weighted.sum(dim=1, keepdim=True)
 
 
+def class_shares(objective: Objective, data: dict) -> torch.Tensor | None:
+    """:func:`~tangle_drake.tangle_cnn.objectives.prior_weights` of a checkpoint's (or a
+    training run's) ``data`` summary, as the tensor :func:`reweighted` takes."""
+    shares = prior_weights(objective, data)
+    return None if shares is None else torch.as_tensor(shares, dtype=torch.float32)
+
+
 class TangleModel:
     """The network in eval mode on the CPU, with the crop spec and normalisation it was trained
     with, so callers hand over metric crops or whole depth images and never normalise.
@@ -60,9 +67,7 @@ class TangleModel:
             raise TangleDrakeError(f"a {self.objective.name} model needs "
                                    f"{len(self.objective.classes)} outputs, the network has "
                                    f"{network.config.classes}")
-        weights = prior_weights(self.objective, self.info.get("data") or {})
-        self.class_weights = None if weights is None else torch.as_tensor(weights,
-                                                                          dtype=torch.float32)
+        self.class_weights = class_shares(self.objective, self.info.get("data") or {})
         """The training data's class shares that the balanced network's probabilities are
         weighted by (``None``: its output is used as it is); see ``Objective.prior_corrected``."""
         self.source = source

@@ -41,11 +41,11 @@ class Objective:
     """How ``train`` evens out its classes unless told (``split.BALANCES``)."""
     prior_corrected: bool = False
     """Whether the model's probabilities are moved back from the equal class shares it trained
-    on (``split.undersample``) to its data's own shares (:func:`prior_weights`). A pick model's
-    P(one part) is then the chance that the pick brings up one part, which a rate or a
-    recovery plan can use (on the S-hook's test piles the outcome model's calibration error fell
-    from 31 to 10 points); the tangle CNN keeps the paper's balanced output, which its
-    harmonic-mean rule was made with."""
+    on (undersampled, or weighted in the loss: ``split.BALANCES``) to its data's own shares
+    (:func:`prior_weights`). A pick model's P(one part) is then the chance that the pick
+    brings up one part, which a rate or a recovery plan can use (on the S-hook's test piles the
+    outcome model's calibration error fell from 31 to 10 points); the tangle CNN keeps the
+    paper's balanced output, which its harmonic-mean rule was made with."""
 
     @property
     def failure(self) -> str:

@@ -41,10 +41,10 @@ from tangle_drake.tangle_cnn.checkpoint import (
     save_atomic,
 )
 from tangle_drake.tangle_cnn.metrics import class_metrics, few_samples_warning
-from tangle_drake.tangle_cnn.model import reweighted
+from tangle_drake.tangle_cnn.model import class_shares, reweighted
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION, Normalisation
-from tangle_drake.tangle_cnn.objectives import objective_named, prior_weights
+from tangle_drake.tangle_cnn.objectives import objective_named
 from tangle_drake.tangle_cnn.train_settings import AUGMENTATIONS, TrainSettings
 from tangle_drake.tangle_cnn.training_data import TrainingData, load_training_data
 
@@ -126,8 +126,7 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
 
     # Validation piles at the data's own class shares (a weighted loss) are scored at them, as
     # ``evaluate`` scores the model there; undersampled ones by the balanced output.
-    shares = prior_weights(objective, data.summary) if data.loss_weights is not None else None
-    shares = None if shares is None else torch.as_tensor(shares, dtype=torch.float32)
+    shares = class_shares(objective, data.summary) if data.loss_weights is not None else None
     while not (reason := _stop_reason(state, settings)):
         epoch = state["epoch"] + 1
         start = time.perf_counter()
