@@ -352,7 +352,8 @@ def test_a_cnn_method_without_a_model_is_an_error_or_left_out_of_the_defaults(
     config, trials, notices = plan(BenchOptions(parts=["u_hook"]))
     assert [m.name for m in config.methods["u_hook"]] == ["random", "graspability"]
     assert trials == 50 and config.mode == "floating"
-    assert len(notices) == 1 and "cnn, harmonic" in notices[0] and "u_hook.pt" in notices[0]
+    assert len(notices) == 1 and "cnn, harmonic, success-cnn, outcome" in notices[0]
+    assert all(f"u_hook{suffix}.pt" in notices[0] for suffix in ("", ".success", ".outcome"))
 
 
 def test_the_outcome_method_reads_the_part_s_pick_outcome_model(tmp_path, monkeypatch):

@@ -66,9 +66,11 @@ from tangle_drake.tangle_cnn.selection import (
 )
 from tangle_drake.tangle_data.perturb import offset_pose
 
-DEFAULT_METHODS = ("random", "graspability", "cnn", "harmonic")
-"""The methods a run compares unless told otherwise (every rule is a method, under its own
-name; the ``emap`` ones on request)."""
+DEFAULT_METHODS = ("random", "graspability", "cnn", "harmonic", "success-cnn", "outcome")
+"""The methods a run compares unless told otherwise: the paper's comparison (graspability, the
+seed's success/failure CNN, its tangle CNN with the harmonic mean) with the pick-outcome model
+and two controls. Every rule is a method under its own name; the others (``emap``,
+``success-harmonic``) on request."""
 MODEL_PREFIX = "model:"
 SHIPPED_MODEL_METHODS = {OUTCOME.name: OUTCOME}
 """Methods named for a shipped model other than their rule's first (``outcome``: the part's

@@ -30,9 +30,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "graspability), emap, emap-harmonic, or "
                              "model:PATH (your checkpoint, with its own rule), or RULE:PATH "
                              "(a CNN rule with your checkpoint, e.g. success-cnn:M.outcome.pt"
-                             "); default: random "
-                             "graspability cnn harmonic, leaving out, with a notice, a CNN "
-                             "method whose part has no trained model")
+                             "); default: random graspability cnn harmonic success-cnn "
+                             "outcome (the paper's comparison), leaving out, with a notice, a "
+                             "CNN method whose part has no trained model")
     parser.add_argument("--parts", "--part", nargs="+", default=None, metavar="PART",
                         dest="parts",
                         help="built-in parts or mesh files (default: every built-in part)")
