@@ -15,7 +15,7 @@ from tangle_drake.bench.methods import MethodRun, MethodSelector
 from tangle_drake.dataset import finished_tasks, load_samples, read_manifest
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import GraspCandidate
-from tangle_drake.tangle_data.ceiling import pick_ceiling
+from tangle_drake.tangle_data.ceiling import pick_ceiling, rule_choice
 from tangle_drake.tangle_data.collect import collect_picks
 from tangle_drake.tangle_data.perturb import ContactScaler, PhysicsSpread, PickPhysics, offset_pose
 from tangle_drake.tangle_data.physical import PhysicalPickSimulator, PickDataSettings
@@ -168,6 +168,24 @@ def test_the_ceiling_is_graspabilitys_first_reachable_pick_against_the_best_of_e
     assert ceiling.by_rank == {0: (0.0, 2), 1: (pytest.approx(1 / 3), 3), 2: (0.5, 2)}
     with pytest.raises(ValueError, match="no physical picks"):
         pick_ceiling({name: np.zeros(0) for name in samples})
+
+
+def test_a_rules_first_picks_are_scored_by_the_recorded_outcomes_of_its_choice():
+    # Pile 0: rank 0 several, rank 1 one; pile 1: rank 0 one, rank 1 none; pile 2: rank 0
+    # unreachable (absent), rank 1 several, rank 2 one. The model favours the one-part picks.
+    samples = {"task": np.array([0, 0, 1, 1, 2, 2]), "rank": np.array([1, 0, 0, 1, 2, 1]),
+               "outcome": np.array([1, 2, 1, 0, 1, 2]),
+               "score": np.array([0.8, 0.9, 0.7, 0.6, 0.4, 0.5])}
+    p_one = np.array([0.9, 0.2, 0.8, 0.3, 0.7, 0.1])
+    ceiling = pick_ceiling(samples)
+    choice = rule_choice(samples, "success-cnn", p_one)
+    assert choice.success == pytest.approx(1.0) and ceiling.graspability == pytest.approx(1 / 3)
+    assert choice.closed == pytest.approx(1.0)
+    assert (choice.against_graspability.a_only, choice.against_graspability.b_only) == (2, 0)
+    assert rule_choice(samples, "graspability").success == pytest.approx(ceiling.graspability)
+    # A model that prefers the wrong picks loses against graspability: a negative share.
+    worse = rule_choice(samples, "success-cnn", 1 - p_one)
+    assert worse.success == 0.0 and worse.closed == pytest.approx(-0.5)
 
 
 def test_a_pick_draws_its_physics_from_the_seed_within_the_spread(uninterrupted):

@@ -2,9 +2,14 @@
 
 For each dataset of ``tangle-drake collect --label pick`` (one per part), prints the first-pick
 success of graspability alone, of the oracle that picks the best of each pile's candidates,
-their gap, and each rank's success rate (:mod:`tangle_drake.tangle_data.ceiling`).
+their gap, and each rank's success rate (:mod:`tangle_drake.tangle_data.ceiling`). With
+``--model``, also what each model's rule would have picked first on the same piles, and how much
+of the gap it closes: a measure of the model's ranking that needs no benchmark run (on piles of
+another seed than its training data's, e.g. the test picks of ``make_trained_models.py``).
 
     python tools/pick_ceiling.py data/picks_u_hook data/picks_c_ring ... [--json FILE]
+    python tools/pick_ceiling.py data/u_hook_pick_test --model success outcome
+    python tools/pick_ceiling.py data/part_pick_test --model part.outcome.pt --rule success-cnn
 """
 
 from __future__ import annotations
@@ -17,40 +22,82 @@ from pathlib import Path
 
 from tangle_drake.dataset import load_samples, read_manifest
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.tangle_data.ceiling import pick_ceiling
+from tangle_drake.pick.selection import default_rule, model_objective, trained_model_path
+from tangle_drake.tangle_cnn.objectives import OBJECTIVES, check_serves
+from tangle_drake.tangle_data.ceiling import RuleChoice, pick_ceiling, rule_choice
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("data", nargs="+", type=Path, help="physical-pick dataset directories")
     parser.add_argument("--json", type=Path, help="also write the figures here")
+    parser.add_argument("--model", nargs="+", default=[], metavar="MODEL",
+                        help="checkpoints, or the names of shipped models' objectives "
+                             f"({', '.join(OBJECTIVES)}: trained/<part>[.objective].pt, the "
+                             "dataset's part's), whose rules' first picks to score")
+    parser.add_argument("--rule", help="the rule the models pick with (default: each "
+                                       "model's own, as bench's model:PATH)")
     args = parser.parse_args()
     rows = {}
+    choices: list[tuple[str, str, RuleChoice]] = []
     print("| part | piles | graspability [95 % CI] | top-k oracle [95 % CI] | gap | by rank |")
     print("|---|---|---|---|---|---|")
     for directory in args.data:
         try:
-            if read_manifest(directory).get("label") != "pick":
+            manifest = read_manifest(directory)
+            if manifest.get("label") != "pick":
                 raise TangleDrakeError(f"{directory} is not physical-pick data (collect "
                                        "--label pick)")
-            ceiling = pick_ceiling(load_samples(directory, ("task", "rank", "outcome")))
+            part = manifest.get("part", directory.name)
+            samples = load_samples(directory, ("task", "rank", "outcome") + (
+                ("score", "crop", "depth_m") if args.model else ()))
+            ceiling = pick_ceiling(samples)
+            for model in args.model:
+                choices.append((part, model, _choice(samples, part, model, args.rule)))
         except (TangleDrakeError, ValueError) as error:
             print(f"error: {error}", file=sys.stderr)
             return 2
-        part = read_manifest(directory).get("part", directory.name)
-        rows[part] = asdict(ceiling)
-
-        def rate(value: float, interval: tuple[float, float]) -> str:
-            return f"{100 * value:.1f} % [{100 * interval[0]:.1f}, {100 * interval[1]:.1f}]"
-
+        rows[part] = asdict(ceiling) | {"models": {model: asdict(choice) for p, model, choice
+                                                   in choices if p == part}}
         ranks = ", ".join(f"{r}: {100 * s:.0f} %" for r, (s, _) in ceiling.by_rank.items())
         print(f"| {part} | {ceiling.piles} | "
               f"{rate(ceiling.graspability, ceiling.graspability_interval)} | "
               f"{rate(ceiling.oracle, ceiling.oracle_interval)} | "
               f"{100 * ceiling.gap:+.1f} | {ranks} |")
+    if choices:
+        print("\n| part | model | rule | its first pick [95 % CI] | minus graspability [95 % CI] "
+              "| McNemar p | gap closed |")
+        print("|---|---|---|---|---|---|---|")
+    for part, model, choice in choices:
+        paired = choice.against_graspability
+        closed = "-" if choice.closed is None else f"{100 * choice.closed:.0f} %"
+        print(f"| {part} | {model} | {choice.rule} | {rate(choice.success, choice.interval)} | "
+              f"{100 * paired.difference:+.1f} [{100 * paired.lower:+.1f}, "
+              f"{100 * paired.upper:+.1f}] | {paired.p_value:.3g} | {closed} |")
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1) + "\n")
     return 0
+
+
+def rate(value: float, interval: tuple[float, float]) -> str:
+    return f"{100 * value:.1f} % [{100 * interval[0]:.1f}, {100 * interval[1]:.1f}]"
+
+
+def _choice(samples: dict, part: str, model: str, rule: str | None) -> RuleChoice:
+    """``model``'s (a checkpoint, or a shipped objective's name) rule's first picks."""
+    from tangle_drake.tangle_cnn.model import load_tangle_model  # imports torch
+
+    path = trained_model_path(part, model) if model in OBJECTIVES else Path(model)
+    if not path.is_file():
+        raise TangleDrakeError(f"model file not found: {path}")
+    rule = rule or default_rule(path)
+    check_serves(rule, model_objective(path), path)
+    tangle_model = load_tangle_model(path)
+    size = tangle_model.crop.size_px
+    if samples["crop"].shape[1:] != (size, size):
+        raise TangleDrakeError(f"{path} takes {size} px crops, the data holds "
+                               f"{samples['crop'].shape[1]} px ones")
+    return rule_choice(samples, rule, tangle_model.predict(samples["crop"], samples["depth_m"]))
 
 
 if __name__ == "__main__":

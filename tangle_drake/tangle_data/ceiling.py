@@ -5,7 +5,8 @@ candidates would have brought up. Graspability alone picks the best one it can r
 lowest rank with an outcome, as the planner goes down its order); an oracle that knew every
 outcome picks one that brings up exactly one part whenever there is one. Any rule that
 re-ranks the same candidates (the tangle CNN's, the success CNN's, the entanglement map's)
-lies between the two, so their gap is what learning can close.
+lies between the two, so their gap is what learning can close; :func:`rule_choice` measures how
+much of it a rule with a model closes on the same piles.
 """
 
 from __future__ import annotations
@@ -14,8 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tangle_drake.bench.stats import wilson
+from tangle_drake.bench.stats import PairedDifference, paired_difference, wilson
 from tangle_drake.pick.outcome import Outcome
+from tangle_drake.tangle_cnn.selection import rank
 from tangle_drake.tangle_data.physical import OUTCOME_CODES
 
 ONE = OUTCOME_CODES[Outcome.ONE]
@@ -59,3 +61,49 @@ def pick_ceiling(samples: dict[str, np.ndarray]) -> Ceiling:
                for r in np.unique(ranks)}
     return Ceiling(n, float(np.mean(first)), float(np.mean(best)), by_rank,
                    wilson(int(np.sum(first)), n), wilson(int(np.sum(best)), n))
+
+
+@dataclass(frozen=True)
+class RuleChoice:
+    """A rule's first picks on the same piles, against graspability's and the oracle's."""
+
+    rule: str
+    success: float
+    """Exactly one part from the rule's pick (its best candidate with an outcome)."""
+    interval: tuple[float, float]
+    """Wilson 95 %."""
+    against_graspability: PairedDifference
+    """The rule's picks minus graspability's, pile by pile (Newcombe's interval, McNemar)."""
+    closed: float | None
+    """The share of graspability's gap to the oracle the rule closes (``None``: no gap)."""
+
+
+def rule_choice(samples: dict[str, np.ndarray], rule: str,
+                p_model: np.ndarray | None = None) -> RuleChoice:
+    """What ``rule`` would have picked first on each pile of the samples (fields ``task``,
+    ``rank``, ``outcome``, ``score``; ``p_model`` (N,) the model's probability per sample),
+    scored by the outcome the data recorded for that candidate.
+
+    The rule sees a pile's candidates that have an outcome (a pick that could not be attempted
+    is absent, as the planner passes over an unreachable candidate), graspability normalised by
+    their best.
+    """
+    tasks, ranks, outcomes, scores = (np.asarray(samples[name])
+                                      for name in ("task", "rank", "outcome", "score"))
+    p = None if p_model is None else np.asarray(p_model, dtype=np.float64)
+    if len(tasks) == 0:
+        raise ValueError("no physical picks to measure the rule on")
+    first, chosen, best = [], [], []
+    for task in np.unique(tasks):
+        rows = np.flatnonzero(tasks == task)
+        rows = rows[np.argsort(ranks[rows], kind="stable")]
+        pile = outcomes[rows] == ONE
+        order = rank(rule, scores[rows], None if p is None else p[rows]).order
+        first.append(bool(pile[0]))
+        chosen.append(bool(pile[order[0]]))
+        best.append(bool(pile.any()))
+    n, gap = len(first), np.mean(best) - np.mean(first)
+    gained = np.mean(chosen) - np.mean(first)
+    return RuleChoice(rule, float(np.mean(chosen)), wilson(int(np.sum(chosen)), n),
+                      paired_difference(chosen, first),
+                      float(gained / gap) if gap > 0 else None)
