@@ -240,3 +240,32 @@ def test_bench_warns_when_a_model_was_trained_on_the_piles_it_tests(tmp_path):
     assert notices(3) == [f"warning: {model} was trained on 1 of the 3 u_hook piles this run "
                           f"tests model:{model} on: its figures there are not a test; collect "
                           "its data with another --seed"]
+
+
+def test_the_ceiling_tool_scores_a_models_first_picks_on_pick_data(models, picks, tmp_path):
+    """``tools/pick_ceiling.py --model``: the success CNN, which tells the synthetic piles'
+    picks apart, closes graspability's gap to the oracle (graspability's scores are noise
+    there); a model the rule cannot serve is refused with the reason."""
+    import json
+    import shutil
+    import subprocess
+    import sys
+
+    from tangle_drake.dataset import read_manifest, write_manifest
+
+    data = tmp_path / "picks"
+    shutil.copytree(picks, data)
+    write_manifest(data, {**read_manifest(data), "label": "pick"})
+    tool = Path(__file__).parents[1] / "tools" / "pick_ceiling.py"
+    figures = tmp_path / "ceiling.json"
+    done = subprocess.run([sys.executable, str(tool), str(data), "--model", str(models["success"]),
+                           "--json", str(figures)], capture_output=True, text=True, check=True)
+    row = json.loads(figures.read_text())["synthetic_bars"]
+    choice = row["models"][str(models["success"])]
+    assert choice["rule"] == "success-cnn" and "| success-cnn |" in done.stdout
+    assert row["graspability"] < choice["success"] == pytest.approx(row["oracle"])
+    assert choice["closed"] == pytest.approx(1.0)
+    refused = subprocess.run([sys.executable, str(tool), str(data), "--model",
+                              str(models["tangled"]), "--rule", "success-cnn"],
+                             capture_output=True, text=True)
+    assert refused.returncode == 2 and "needs a model of P(success)" in refused.stderr
