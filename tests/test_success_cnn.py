@@ -269,3 +269,7 @@ def test_the_ceiling_tool_scores_a_models_first_picks_on_pick_data(models, picks
                               str(models["tangled"]), "--rule", "success-cnn"],
                              capture_output=True, text=True)
     assert refused.returncode == 2 and "needs a model of P(success)" in refused.stderr
+    refused = subprocess.run([sys.executable, str(tool), str(data), "--model",
+                              str(models["success"]), "--rule", "random"],
+                             capture_output=True, text=True)
+    assert refused.returncode == 2 and "--rule 'random': choose a rule" in refused.stderr

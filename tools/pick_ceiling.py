@@ -24,6 +24,7 @@ from tangle_drake.dataset import load_samples, read_manifest
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.pick.selection import default_rule, model_objective, trained_model_path
 from tangle_drake.tangle_cnn.objectives import OBJECTIVES, check_serves
+from tangle_drake.tangle_cnn.selection import EMAP_RULES, MODEL_RULES
 from tangle_drake.tangle_data.ceiling import RuleChoice, pick_ceiling, rule_choice
 
 
@@ -91,6 +92,9 @@ def _choice(samples: dict, part: str, model: str, rule: str | None) -> RuleChoic
     if not path.is_file():
         raise TangleDrakeError(f"model file not found: {path}")
     rule = rule or default_rule(path)
+    if rule not in MODEL_RULES or rule in EMAP_RULES:
+        raise TangleDrakeError(f"--rule {rule!r}: choose a rule that ranks by a model alone "
+                               f"({', '.join(r for r in MODEL_RULES if r not in EMAP_RULES)})")
     check_serves(rule, model_objective(path), path)
     tangle_model = load_tangle_model(path)
     size = tangle_model.crop.size_px
