@@ -20,6 +20,15 @@ def test_wilson_interval_matches_published_values(successes, n, lower, upper):
     assert high == pytest.approx(upper, abs=5e-5)
 
 
+def test_wilson_interval_holds_its_rate_even_at_all_or_nothing():
+    # 10 of 10's upper end computed to 1 - 1e-16, and the report's error bars went negative.
+    for n in range(1, 201):
+        for successes in (0, 1, n - 1, n):
+            low, high = wilson(successes, n)
+            assert 0.0 <= low <= successes / n <= high <= 1.0
+    assert wilson(10, 10)[1] == 1.0 and wilson(0, 10)[0] == 0.0
+
+
 def test_wilson_interval_of_nothing_is_everything_and_bad_counts_are_refused():
     assert wilson(0, 0) == (0.0, 1.0)
     with pytest.raises(ValueError):
