@@ -22,8 +22,8 @@ from pathlib import Path
 
 from tangle_drake.dataset import load_samples, read_manifest
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.pick.selection import default_rule, model_objective, trained_model_path
-from tangle_drake.tangle_cnn.objectives import OBJECTIVES, check_serves
+from tangle_drake.pick.selection import trained_model_path
+from tangle_drake.tangle_cnn.objectives import DEFAULT_RULES, OBJECTIVES, check_serves
 from tangle_drake.tangle_cnn.selection import EMAP_RULES, MODEL_RULES
 from tangle_drake.tangle_data.ceiling import RuleChoice, pick_ceiling, rule_choice
 
@@ -54,7 +54,8 @@ def main() -> int:
                 ("score", "crop", "depth_m") if args.model else ()))
             ceiling = pick_ceiling(samples)
             for model in args.model:
-                choices.append((part, model, _choice(samples, part, model, args.rule)))
+                choices.append((part, model, _choice(samples, manifest, directory, part, model,
+                                                     args.rule)))
         except (TangleDrakeError, ValueError) as error:
             print(f"error: {error}", file=sys.stderr)
             return 2
@@ -84,23 +85,23 @@ def rate(value: float, interval: tuple[float, float]) -> str:
     return f"{100 * value:.1f} % [{100 * interval[0]:.1f}, {100 * interval[1]:.1f}]"
 
 
-def _choice(samples: dict, part: str, model: str, rule: str | None) -> RuleChoice:
-    """``model``'s (a checkpoint, or a shipped objective's name) rule's first picks."""
-    from tangle_drake.tangle_cnn.model import load_tangle_model  # imports torch
+def _choice(samples: dict, manifest: dict, directory: Path, part: str, model: str,
+            rule: str | None) -> RuleChoice:
+    """``model``'s (a checkpoint, or a shipped objective's name) rule's first picks on the
+    samples of ``directory``."""
+    from tangle_drake.tangle_cnn.evaluate import check_crop  # imports torch
+    from tangle_drake.tangle_cnn.model import load_tangle_model
+    from tangle_drake.tangle_cnn.training_data import crop_spec
 
     path = trained_model_path(part, model) if model in OBJECTIVES else Path(model)
-    if not path.is_file():
-        raise TangleDrakeError(f"model file not found: {path}")
-    rule = rule or default_rule(path)
+    tangle_model = load_tangle_model(path)
+    rule = rule or DEFAULT_RULES[tangle_model.objective.name]
     if rule not in MODEL_RULES or rule in EMAP_RULES:
         raise TangleDrakeError(f"--rule {rule!r}: choose a rule that ranks by a model alone "
                                f"({', '.join(r for r in MODEL_RULES if r not in EMAP_RULES)})")
-    check_serves(rule, model_objective(path), path)
-    tangle_model = load_tangle_model(path)
-    size = tangle_model.crop.size_px
-    if samples["crop"].shape[1:] != (size, size):
-        raise TangleDrakeError(f"{path} takes {size} px crops, the data holds "
-                               f"{samples['crop'].shape[1]} px ones")
+    check_serves(rule, tangle_model.objective, path)
+    check_crop(tangle_model.crop, crop_spec(manifest, samples["crop"].shape[1], directory),
+               directory)
     return rule_choice(samples, rule, tangle_model.predict(samples["crop"], samples["depth_m"]))
 
 

@@ -160,7 +160,7 @@ def evaluate_model(model: TangleModel, directory: Path,
     objective = model.objective
     samples, crop, manifest = load_checked_samples(directory, causes, objective)
     labels = samples["label"].astype(np.int64)
-    _check_crop(model.crop, crop, directory)
+    check_crop(model.crop, crop, directory)
     rows, scope, balanced = _scored_rows(model, samples, labels, len(objective.classes))
     corrected = model.class_weights is not None and not balanced
     probabilities = class_probabilities(model, samples, rows, progress, balanced=not corrected)
@@ -188,7 +188,9 @@ def evaluate_model(model: TangleModel, directory: Path,
         calibration=calibration(1.0 - p_tangled, truth == 0), prior_corrected=corrected)
 
 
-def _check_crop(model_crop: CropSpec, data_crop: CropSpec, directory: Path) -> None:
+def check_crop(model_crop: CropSpec, data_crop: CropSpec, directory: Path) -> None:
+    """Refuse data cropped otherwise than the model's training data: its probabilities would
+    mean nothing there."""
     if (model_crop.size_px != data_crop.size_px
             or not np.isclose(model_crop.size_m, data_crop.size_m, rtol=1e-6)):
         raise TangleDrakeError(

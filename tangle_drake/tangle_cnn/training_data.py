@@ -83,7 +83,7 @@ def load_checked_samples(directory: Path, extra_fields: tuple[str, ...] = (),
     if crops.ndim != 3 or crops.shape[1] != crops.shape[2]:
         raise TangleDrakeError(f"dataset {directory}: crops have shape {crops.shape[1:]}, "
                                "not square")
-    crop = _crop_spec(manifest, crops.shape[1], directory)
+    crop = crop_spec(manifest, crops.shape[1], directory)
     if not (np.isfinite(crops).all() and np.isfinite(depths).all() and (depths > 0).all()):
         raise TangleDrakeError(f"dataset {directory}: crops and depths must be finite, "
                                "depths positive")
@@ -157,7 +157,7 @@ def _target_mask(gripper: dict, crop: CropSpec, directory: Path) -> TargetMask:
     return TargetMask.for_hand(crop, hand)
 
 
-def _crop_spec(manifest: dict, size_px: int, directory: Path) -> CropSpec:
+def crop_spec(manifest: dict, size_px: int, directory: Path) -> CropSpec:
     """The manifest's crop spec, checked against the crops' size."""
     info = manifest.get("crop")
     try:

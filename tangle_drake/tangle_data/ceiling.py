@@ -46,16 +46,12 @@ class Ceiling:
 def pick_ceiling(samples: dict[str, np.ndarray]) -> Ceiling:
     """The ceiling of the samples' piles (fields ``task``, ``rank``, ``outcome``; tasks are
     piles)."""
-    tasks, ranks, outcomes = (np.asarray(samples[name]) for name in ("task", "rank", "outcome"))
-    if len(tasks) == 0:
-        raise ValueError("no physical picks to measure the ceiling on")
+    ranks, outcomes = np.asarray(samples["rank"]), np.asarray(samples["outcome"])
     first, best = [], []
-    for task in np.unique(tasks):
-        mine = tasks == task
-        order = np.argsort(ranks[mine], kind="stable")
-        pile = outcomes[mine][order]
-        first.append(pile[0] == ONE)
-        best.append((pile == ONE).any())
+    for rows in _piles(samples, "the ceiling"):
+        pile = outcomes[rows] == ONE
+        first.append(bool(pile[0]))
+        best.append(bool(pile.any()))
     n = len(first)
     by_rank = {int(r): (float((outcomes[ranks == r] == ONE).mean()), int((ranks == r).sum()))
                for r in np.unique(ranks)}
@@ -88,15 +84,10 @@ def rule_choice(samples: dict[str, np.ndarray], rule: str,
     is absent, as the planner passes over an unreachable candidate), graspability normalised by
     their best.
     """
-    tasks, ranks, outcomes, scores = (np.asarray(samples[name])
-                                      for name in ("task", "rank", "outcome", "score"))
+    outcomes, scores = np.asarray(samples["outcome"]), np.asarray(samples["score"])
     p = None if p_model is None else np.asarray(p_model, dtype=np.float64)
-    if len(tasks) == 0:
-        raise ValueError("no physical picks to measure the rule on")
     first, chosen, best = [], [], []
-    for task in np.unique(tasks):
-        rows = np.flatnonzero(tasks == task)
-        rows = rows[np.argsort(ranks[rows], kind="stable")]
+    for rows in _piles(samples, "the rule"):
         pile = outcomes[rows] == ONE
         order = rank(rule, scores[rows], None if p is None else p[rows]).order
         first.append(bool(pile[0]))
@@ -107,3 +98,12 @@ def rule_choice(samples: dict[str, np.ndarray], rule: str,
     return RuleChoice(rule, float(np.mean(chosen)), wilson(int(np.sum(chosen)), n),
                       paired_difference(chosen, first),
                       float(gained / gap) if gap > 0 else None)
+
+
+def _piles(samples: dict[str, np.ndarray], what: str) -> list[np.ndarray]:
+    """Each pile's sample rows (tasks are piles), in graspability's rank order."""
+    tasks, ranks = np.asarray(samples["task"]), np.asarray(samples["rank"])
+    if len(tasks) == 0:
+        raise ValueError(f"no physical picks to measure {what} on")
+    piles = [np.flatnonzero(tasks == task) for task in np.unique(tasks)]
+    return [rows[np.argsort(ranks[rows], kind="stable")] for rows in piles]
