@@ -273,3 +273,31 @@ def test_the_ceiling_tool_scores_a_models_first_picks_on_pick_data(models, picks
                               str(models["success"]), "--rule", "random"],
                              capture_output=True, text=True)
     assert refused.returncode == 2 and "--rule 'random': choose a rule" in refused.stderr
+
+
+def test_the_learning_curve_tool_trains_pick_models_on_prefixes_and_scores_them(
+        models, picks, tmp_path):
+    """``tools/learning_curve.py --objective success``: a success CNN per prefix of the pick
+    data, each scored on fresh piles' picks by P(not one part); a comparison model of another
+    objective is refused before any training."""
+    import json
+    import subprocess
+    import sys
+
+    test = tmp_path / "test_picks"
+    write_synthetic_dataset(test, 64, seed=5, outcomes=True)
+    tool = Path(__file__).parents[1] / "tools" / "learning_curve.py"
+    command = [sys.executable, str(tool), "--objective", "success", "--data", str(picks),
+               "--test", str(test), "--sizes", "64", "--out", str(tmp_path / "curve")]
+    refused = subprocess.run([*command, "--against", str(models["tangled"])],
+                             capture_output=True, text=True)
+    assert refused.returncode == 1 and "is a tangled model" in refused.stderr
+    assert not (tmp_path / "curve").exists()
+    done = subprocess.run([*command, "--against", str(models["success"])],
+                          capture_output=True, text=True, check=True)
+    curve = json.loads((tmp_path / "curve" / "curve.json").read_text())
+    assert curve["objective"] == "success" and curve["test_samples"] == 64
+    assert [point["samples"] for point in curve["points"]] == [64, 256]
+    assert curve["points"][-1]["auc"] > 0.9, done.stdout  # the bars tell the outcomes apart
+    assert curve["points"][-1]["auc_difference"] == 0.0
+    assert "| 64 |" in done.stdout and "| 256 |" in done.stdout
