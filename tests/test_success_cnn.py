@@ -2,6 +2,10 @@
 outcomes, names its objective, ranks with ``success-cnn``, and is refused, with a clear error,
 by the rules that read P(not tangled) (and a tangle CNN by ``success-cnn``)."""
 
+import json
+import shutil
+import subprocess
+import sys
 from functools import partial
 from pathlib import Path
 
@@ -33,6 +37,7 @@ from tangle_drake.tangle_cnn.training_data import load_checked_samples
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 INTRINSICS = CameraIntrinsics(64, 48, 50.0, 50.0, 32.0, 24.0)
 run_train = partial(run_command, "train")
+TOOLS = Path(__file__).parents[1] / "tools"
 
 
 @pytest.fixture(scope="module")
@@ -246,17 +251,12 @@ def test_the_ceiling_tool_scores_a_models_first_picks_on_pick_data(models, picks
     """``tools/pick_ceiling.py --model``: the success CNN, which tells the synthetic piles'
     picks apart, closes graspability's gap to the oracle (graspability's scores are noise
     there); a model the rule cannot serve is refused with the reason."""
-    import json
-    import shutil
-    import subprocess
-    import sys
-
     from tangle_drake.dataset import read_manifest, write_manifest
 
     data = tmp_path / "picks"
     shutil.copytree(picks, data)
     write_manifest(data, {**read_manifest(data), "label": "pick"})
-    tool = Path(__file__).parents[1] / "tools" / "pick_ceiling.py"
+    tool = TOOLS / "pick_ceiling.py"
     figures = tmp_path / "ceiling.json"
     done = subprocess.run([sys.executable, str(tool), str(data), "--model", str(models["success"]),
                            "--json", str(figures)], capture_output=True, text=True, check=True)
@@ -280,13 +280,9 @@ def test_the_learning_curve_tool_trains_pick_models_on_prefixes_and_scores_them(
     """``tools/learning_curve.py --objective success``: a success CNN per prefix of the pick
     data, each scored on fresh piles' picks by P(not one part); a comparison model of another
     objective is refused before any training."""
-    import json
-    import subprocess
-    import sys
-
     test = tmp_path / "test_picks"
     write_synthetic_dataset(test, 64, seed=5, outcomes=True)
-    tool = Path(__file__).parents[1] / "tools" / "learning_curve.py"
+    tool = TOOLS / "learning_curve.py"
     command = [sys.executable, str(tool), "--objective", "success", "--data", str(picks),
                "--test", str(test), "--sizes", "64", "--out", str(tmp_path / "curve")]
     refused = subprocess.run([*command, "--against", str(models["tangled"])],

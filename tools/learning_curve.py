@@ -134,8 +134,7 @@ def run(args: argparse.Namespace) -> None:
         if not model.is_file():
             start = time.perf_counter()
             train(data, model, TrainSettings(seed=args.seed, objective=args.objective),
-                  device="cpu",
-                  log=lambda line: print(f"  {line}", flush=True))
+                  device="cpu", log=lambda line: print(f"  {line}", flush=True))
             seconds = round(time.perf_counter() - start, 1)
         points.append({"samples": held, "model": str(model), "train_s": seconds})
         print(f"trained on {held} samples: {model}", flush=True)
