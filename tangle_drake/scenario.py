@@ -16,7 +16,12 @@ from pathlib import Path
 import yaml
 from pydrake.common.yaml import yaml_load_typed
 from pydrake.lcm import DrakeLcmParams
-from pydrake.multibody.parsing import ModelDirective
+from pydrake.multibody.parsing import (
+    FlattenModelDirectives,
+    ModelDirective,
+    ModelDirectives,
+    PackageMap,
+)
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.sensors import CameraConfig
 
@@ -27,8 +32,9 @@ from tangle_drake.drivers.config import (
     ParallelJawDriver,
     camera_channel,
 )
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.hardware.config import HardwareConfig, default_lcm_buses
+from tangle_drake.errors import SEED_LIMIT, TangleDrakeError
+from tangle_drake.hardware.config import HardwareConfig, check_lcm_url, default_lcm_buses
+from tangle_drake.paths import register_packages
 
 
 def _default_plant_config() -> MultibodyPlantConfig:
@@ -101,6 +107,8 @@ class PileConfig:
         _require(self.settle_speed > 0, f"{where}.settle_speed", "must be positive")
         _require(self.settle_time_max > 0, f"{where}.settle_time_max", "must be positive")
         _require(self.max_redraws >= 0, f"{where}.max_redraws", "must be >= 0")
+        _require(0 <= self.seed < SEED_LIMIT, f"{where}.seed",
+                 "must be a non-negative 63-bit integer")
 
     @property
     def total_count(self) -> int:
@@ -171,8 +179,26 @@ class Scenario:
         names = [c.name for c in self.view_cameras]
         _require(len(set(names)) == len(names) and self.camera.name not in names,
                  "view_cameras", "need names unique among all cameras")
+        self._validate_models()
         self.hardware.validate("hardware")
+        for name, bus in self.lcm_buses.items():
+            check_lcm_url(bus.lcm_url, f"lcm_buses.{name}.lcm_url")
         self._validate_links()
+
+    def _validate_models(self) -> None:
+        """Every model the directives add, their nested files included, has its own name."""
+        package_map = PackageMap()
+        register_packages(package_map)
+        try:
+            flat = FlattenModelDirectives(ModelDirectives(directives=self.directives),
+                                          package_map)
+        except RuntimeError as error:
+            raise TangleDrakeError(f"scenario field 'directives': {error}") from error
+        names = [d.add_model.name for d in flat.directives if d.add_model is not None]
+        repeated = sorted({name for name in names if names.count(name) > 1})
+        _require(not repeated, "directives",
+                 f"add the model {', '.join(map(repr, repeated))} more than once: each "
+                 "add_model needs its own name")
 
     def _validate_links(self) -> None:
         """Every driver's and the camera's bus exists; every channel is named, and only once."""
@@ -216,7 +242,19 @@ class _Tagged(typing.NamedTuple):
 
 
 class _TaggedLoader(yaml.SafeLoader):
-    """Safe loader that keeps Drake's variant tags instead of refusing them."""
+    """Safe loader that keeps Drake's variant tags instead of refusing them, and refuses a key
+    given twice in one mapping (YAML would keep the last one silently)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        seen: set = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    "while reading a mapping", node.start_mark,
+                    f"found the key {key!r} twice", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)
 
 
 class _TaggedDumper(yaml.SafeDumper):
@@ -275,7 +313,7 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
     try:
         raw = yaml.load(text, Loader=_TaggedLoader)
     except yaml.YAMLError as error:
-        raise TangleDrakeError(f"{source} is not valid YAML: {error}") from error
+        raise TangleDrakeError(f"{source} is not valid YAML: {_one_line(error)}") from error
     if raw is None:
         raw = {}
     if not isinstance(raw, dict):
@@ -291,6 +329,13 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
     except TangleDrakeError as error:
         raise TangleDrakeError(f"{source}: {error}") from error
     return scenario
+
+
+def _one_line(error: yaml.YAMLError) -> str:
+    """A YAML error as one line: where and what (PyYAML's own text quotes the lines)."""
+    if isinstance(error, yaml.MarkedYAMLError) and error.problem_mark is not None:
+        return f"line {error.problem_mark.line + 1}: {error.problem}"
+    return str(error).replace("\n", " ")
 
 
 def _check_driver_tags(drivers: object, source: str) -> None:

@@ -6,7 +6,7 @@ import argparse
 import shlex
 from pathlib import Path
 
-from tangle_drake.commands.scene import add_scenario_argument
+from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument
 from tangle_drake.failures import FailureKind
 from tangle_drake.workers import add_worker_arguments
 
@@ -48,7 +48,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_worker_arguments(parser, "trials")
     parser.add_argument("--out", type=Path, default=Path("results/bench"),
                         help="results directory (default: results/bench)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the piles (default 0)")
+    add_seed_argument(parser, 0, help="seed of the piles (default 0)")
     add_scenario_argument(parser, "the --mode's: diagrams/floating_gripper.yaml or "
                                   "diagrams/pick_demo.yaml")
     parser.add_argument("--clear", action="store_true",

@@ -15,6 +15,7 @@ import argparse
 from dataclasses import replace
 from pathlib import Path
 
+from tangle_drake.commands.arguments import add_seed_argument
 from tangle_drake.workers import add_worker_arguments
 
 DEFAULT_SAMPLES = 5100
@@ -46,7 +47,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--samples", type=int, default=DEFAULT_SAMPLES, metavar="N",
                         help=f"stop once the dataset holds this many (default {DEFAULT_SAMPLES})")
     parser.add_argument("--out", type=Path, required=True, help="dataset directory")
-    parser.add_argument("--seed", type=int, default=0, help="collection seed (default 0)")
+    add_seed_argument(parser, 0, help="collection seed (default 0)")
     add_worker_arguments(parser, "tasks")
     parser.add_argument("--parts-per-pile", type=int, default=None, metavar="N",
                         help="parts in each pile (default: per part, about three layers)")

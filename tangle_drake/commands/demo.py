@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from tangle_drake.commands.scene import add_scenario_argument
+from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument
 from tangle_drake.tangle_cnn.selection import RULES
 
 
@@ -27,8 +27,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "c_ring, j_hook, e_shape) or a mesh file (default: the "
                              "scenario's)")
     add_scenario_argument(parser)
-    parser.add_argument("--seed", type=int, default=None,
-                        help="pile seed (default: the scenario's pile.seed)")
+    add_seed_argument(parser, None, help="pile seed (default: the scenario's pile.seed)")
     parser.add_argument("--rule", choices=RULES, default=None,
                         help="selection rule (default: harmonic with a model, else "
                              "graspability); emap and emap-harmonic add the topological "

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from tangle_drake.commands.scene import add_scenario_argument
+from tangle_drake.commands.arguments import add_scenario_argument
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

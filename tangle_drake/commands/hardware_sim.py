@@ -7,7 +7,7 @@ import logging
 import math
 import time
 
-from tangle_drake.commands.scene import add_scenario_argument
+from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument
 
 CHECK_TIMEOUT = 10.0
 """Simulated seconds ``--check`` allows its scripted motion."""
@@ -24,8 +24,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "--check instead drives it in this process with a scripted controller "
                     "through the hardware station, over memq:// only.")
     add_scenario_argument(parser)
-    parser.add_argument("--seed", type=int, default=None,
-                        help="pile seed (default: the scenario's pile.seed)")
+    add_seed_argument(parser, None, help="pile seed (default: the scenario's pile.seed)")
     parser.add_argument("--duration", type=float, default=math.inf,
                         help="simulated seconds to run (default: until interrupted)")
     parser.add_argument("--check", action="store_true",

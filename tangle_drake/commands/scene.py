@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-DEFAULT_SCENARIO = "diagrams/pick_demo.yaml"
+from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -22,15 +22,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_scenario_argument(parser)
     parser.add_argument("--out", type=Path, default=Path("out/scene"),
                         help="output directory (default: out/scene)")
-    parser.add_argument("--seed", type=int, default=None,
-                        help="pile seed (default: the scenario's pile.seed)")
+    add_seed_argument(parser, None, help="pile seed (default: the scenario's pile.seed)")
     parser.set_defaults(func=run)
-
-
-def add_scenario_argument(parser: argparse.ArgumentParser,
-                          default: str = f"the shipped {DEFAULT_SCENARIO}") -> None:
-    """The ``--scenario`` option every station command shares."""
-    parser.add_argument("--scenario", default=None, help=f"scenario YAML (default: {default})")
 
 
 def run(args: argparse.Namespace) -> int:

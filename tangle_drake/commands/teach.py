@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from tangle_drake.commands.arguments import add_seed_argument
 from tangle_drake.workers import add_worker_arguments
 
 
@@ -35,7 +36,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--test-samples", type=int, default=None, metavar="N",
                         help="labels from piles of the next seed to test the model on "
                              "(default 500; the shipped models' card tests on 1000)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of everything (default 0)")
+    add_seed_argument(parser, 0, help="seed of everything (default 0)")
     parser.add_argument("--quick", action="store_true",
                         help="every stage, as small as still says something: a check that "
                              "the whole run works (minutes), not a model to use")

@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from tangle_drake.commands.arguments import add_seed_argument
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
@@ -32,9 +34,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help=f"default {default.batch_size}")
     parser.add_argument("--lr", type=float, default=default.lr,
                         help=f"Adam learning rate ({default.lr:g})")
-    parser.add_argument("--seed", type=int, default=default.seed,
-                        help=f"seed of the split, initial weights and shuffles (default "
-                             f"{default.seed})")
+    add_seed_argument(parser, default.seed,
+                      help=f"seed of the split, initial weights and shuffles (default "
+                           f"{default.seed})")
     parser.add_argument("--patience", type=int, default=default.patience,
                         help=f"stop after this many epochs without a lower validation loss "
                              f"(default {default.patience})")

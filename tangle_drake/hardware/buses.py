@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from pydrake.lcm import DrakeLcmInterface
+from pydrake.lcm import DrakeLcm, DrakeLcmInterface
 from pydrake.systems.framework import DiagramBuilder
-from pydrake.systems.lcm import ApplyLcmBusConfig, LcmBuses, LcmInterfaceSystem
+from pydrake.systems.lcm import LcmBuses, LcmInterfaceSystem
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.hardware.config import IN_PROCESS_URL
@@ -38,25 +38,34 @@ def network_bus_url(scenario: Scenario, instead: str) -> str:
 class BusFinder:
     """The LCM instance of each bus name, pumped by the diagram being built.
 
-    Without ``lcm_buses`` the scenario's ``lcm_buses`` are created in the diagram (as Drake's
-    ``hardware_sim`` does); with them, each given instance gets one ``LcmInterfaceSystem``.
+    Without ``lcm_buses`` each bus the station uses gets its own ``DrakeLcm`` from the
+    scenario's ``lcm_buses`` (as Drake's ``hardware_sim`` makes them, but as instances that
+    publish: ``ApplyLcmBusConfig`` hands out its pumping systems, which Python cannot publish
+    through); with them, the given instances are used. Each instance gets one
+    ``LcmInterfaceSystem``.
     """
 
     def __init__(self, scenario: Scenario, builder: DiagramBuilder,
                  lcm_buses: LcmBuses | None, who: str) -> None:
         self._who = who
         self._builder = builder
-        self._pump = lcm_buses is not None
-        self._buses = lcm_buses if lcm_buses is not None else ApplyLcmBusConfig(
-            scenario.lcm_buses, builder)
+        self._scenario = scenario
+        self._given = lcm_buses
+        self._made: dict[str, DrakeLcm] = {}
         self.instances: list[DrakeLcmInterface] = []
         """Every distinct instance found so far."""
 
     def find(self, bus: str) -> DrakeLcmInterface:
-        lcm = self._buses.Find(self._who, bus)
+        if self._given is not None:
+            lcm = self._given.Find(self._who, bus)
+        elif bus in self._made:
+            lcm = self._made[bus]
+        else:
+            if bus not in self._scenario.lcm_buses:
+                raise TangleDrakeError(f"{self._who}: the scenario has no LCM bus {bus!r}")
+            lcm = self._made[bus] = DrakeLcm(self._scenario.lcm_buses[bus])
         if not any(lcm is known for known in self.instances):
             self.instances.append(lcm)
-            if self._pump:
-                name = "lcm_interface" if len(self.instances) == 1 else f"lcm_interface.{bus}"
-                self._builder.AddNamedSystem(name, LcmInterfaceSystem(lcm))
+            name = "lcm_interface" if len(self.instances) == 1 else f"lcm_interface.{bus}"
+            self._builder.AddNamedSystem(name, LcmInterfaceSystem(lcm))
         return lcm

@@ -7,6 +7,8 @@ before anything leaves the process (see ``docs/hardware.md``).
 
 # No `from __future__ import annotations`: Drake's YAML loader needs real field types.
 
+import ipaddress
+import os
 from dataclasses import dataclass
 
 from pydrake.lcm import DrakeLcmParams
@@ -17,6 +19,41 @@ IN_PROCESS_URL = "memq://"
 """LCM's in-process transport: messages never leave the process that made the ``DrakeLcm``."""
 
 DEPTH_FORMATS = ("32F", "16U")
+
+LCM_PROVIDERS = ("udpm", "mpudpm", "memq", "tcpq", "file")
+"""The transports LCM knows; for any other, LCM only prints a line and sends nothing."""
+LCM_DEFAULT_URL = "udpm://239.255.76.67:7667?ttl=0"
+"""LCM's own default, for an empty ``lcm_url`` with no ``LCM_DEFAULT_URL`` in the
+environment."""
+
+
+def check_lcm_url(url: str, where: str) -> None:
+    """Refuse, naming ``where``, a URL that LCM cannot open: LCM itself prints a line and goes
+    on, so a process would say it serves a bus that carries nothing."""
+    url = url or os.environ.get("LCM_DEFAULT_URL") or LCM_DEFAULT_URL
+    provider, separator, rest = url.partition("://")
+    if not separator or provider not in LCM_PROVIDERS:
+        raise TangleDrakeError(f"scenario field '{where}' is {url!r}: an LCM URL starts with "
+                               f"one of {', '.join(p + '://' for p in LCM_PROVIDERS)}")
+    if provider not in ("udpm", "mpudpm"):
+        return
+    address, _, options = rest.partition("?")
+    host, _, port = address.partition(":")
+    try:
+        multicast = ipaddress.IPv4Address(host).is_multicast
+    except ValueError:
+        multicast = False
+    if not multicast:
+        raise TangleDrakeError(f"scenario field '{where}' is {url!r}: {host!r} is no IPv4 "
+                               "multicast address (224.0.0.0 to 239.255.255.255)")
+    if port and not (port.isdigit() and 0 < int(port) < 65536):
+        raise TangleDrakeError(f"scenario field '{where}' is {url!r}: port {port!r} is not "
+                               "a number from 1 to 65535")
+    for option in filter(None, options.split("&")):
+        key, _, value = option.partition("=")
+        if key == "ttl" and not (value.isdigit() and int(value) < 256):
+            raise TangleDrakeError(f"scenario field '{where}' is {url!r}: ttl must be a "
+                                   "number from 0 to 255")
 
 
 def default_lcm_buses() -> dict[str, DrakeLcmParams]:

@@ -26,6 +26,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.lcm import LcmBuses, LcmSubscriberSystem
 
 from tangle_drake.drivers import camera, force_torque, joint_position, parallel_jaw
+from tangle_drake.drivers.config import camera_channel
 from tangle_drake.drivers.limits import station_limits
 from tangle_drake.drivers.registry import carrier, gripper
 from tangle_drake.errors import TangleDrakeError
@@ -41,13 +42,16 @@ class HardwareStation(Diagram):
     hardware = True
 
     def __init__(self, builder: DiagramBuilder, scenario: Scenario,
-                 lcms: list[DrakeLcmInterface], subscribers: list[LcmSubscriberSystem]) -> None:
+                 lcms: list[DrakeLcmInterface],
+                 subscribers: dict[str, LcmSubscriberSystem]) -> None:
         super().__init__()
         builder.BuildInto(self)
         self.set_name("hardware_station")
         self.scenario = scenario
         self._lcms = lcms
         self._subscribers = subscribers
+        """Each status and image subscriber by its channel, as the scenario names it (Drake's
+        subscriber does not tell its channel in every release)."""
         self._startup_timeout = scenario.hardware.startup_timeout
 
     def wait_for_robot(self) -> None:
@@ -55,8 +59,8 @@ class HardwareStation(Diagram):
         after ``hardware.startup_timeout`` wall-clock seconds."""
         deadline = time.monotonic() + self._startup_timeout
         while True:
-            silent = [s.get_channel_name() for s in self._subscribers
-                      if s.WaitForMessage(0, None, 1e-9) == 0]
+            silent = [channel for channel, subscriber in self._subscribers.items()
+                      if subscriber.WaitForMessage(0, None, 1e-9) == 0]
             if not silent:
                 return
             if time.monotonic() >= deadline:
@@ -127,5 +131,8 @@ def build_hardware_station(scenario: Scenario,
                              scenario.hardware, supervisor.GetOutputPort("gripper_command"),
                              send)
     images = camera.add_interface(builder, buses.find(scenario.camera.lcm_bus), scenario)
-    return HardwareStation(builder, scenario, buses.instances,
-                           [arm_status, hand_status, *sensors.values(), images])
+    subscribers = {arm_config.status_channel: arm_status, hand_config.status_channel: hand_status,
+                   **{scenario.force_torque_sensors[name].channel: subscriber
+                      for name, subscriber in sensors.items()},
+                   camera_channel(scenario.camera): images}
+    return HardwareStation(builder, scenario, buses.instances, subscribers)

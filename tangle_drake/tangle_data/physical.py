@@ -34,7 +34,7 @@ from tangle_drake.bench.trials import scenario_mode
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.crops import DEFAULT_CROP, CropSpec, extract_crop
 from tangle_drake.dataset import rows_to_arrays
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.errors import TangleDrakeError, check_seed
 from tangle_drake.failures import FailureKind
 from tangle_drake.parts import load_part
 from tangle_drake.pick import pick_log
@@ -89,9 +89,7 @@ class PickDataSettings:
         if not 1 <= self.top_k <= MAX_TOP_K:
             raise TangleDrakeError(f"--top-k must be between 1 and {MAX_TOP_K}, got "
                                    f"{self.top_k}")
-        if not 0 <= self.seed < 2**63:
-            raise TangleDrakeError(f"--seed must be a non-negative 63-bit integer, got "
-                                   f"{self.seed}")
+        check_seed(self.seed, "--seed")
         if not (math.isfinite(self.depth_noise_m) and self.depth_noise_m >= 0):
             raise TangleDrakeError(f"--depth-noise must be >= 0, got {self.depth_noise_m}")
         if not (math.isfinite(self.crop.size_m) and self.crop.size_m > 0):

@@ -11,7 +11,7 @@ import math
 from dataclasses import asdict, dataclass, field
 
 from tangle_drake.crops import DEFAULT_CROP, CropSpec
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.errors import TangleDrakeError, check_seed
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 
 
@@ -136,9 +136,7 @@ class CollectSettings:
         if self.repeat < 1:
             raise TangleDrakeError(f"--repeat must be at least 1, got {self.repeat}")
         _positive("--crop-size", self.crop.size_m)
-        if not 0 <= self.seed < 2**63:
-            raise TangleDrakeError(f"--seed must be a non-negative 63-bit integer, got "
-                                   f"{self.seed}")
+        check_seed(self.seed, "--seed")
         self.lift.validate(time_step)
         self.labels.validate()
 
