@@ -11,7 +11,7 @@ from collections.abc import Sequence
 
 from tangle_drake import __version__
 from tangle_drake.commands import COMMAND_MODULES
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.errors import SafetyStop, TangleDrakeError
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -32,6 +32,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         code = int(args.func(args) or 0)
         sys.stdout.flush()  # a reader that has gone shows up here, not at interpreter exit
         return code
+    except SafetyStop as error:
+        print(f"error: {error}", file=sys.stderr)
+        return SAFETY_STOP_EXIT
     except TangleDrakeError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
@@ -48,6 +51,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"error: {error.filename}: {error.strerror or error}", file=sys.stderr)
         return 2
 
+
+def console() -> None:
+    """The ``tangle-drake`` console script. After a safety stop the process ends at once:
+    nothing is left to clean up, and the interpreter's teardown (torch's alone takes ~0.4 s)
+    would keep a controller whose robot has stopped running past ``status_timeout`` + 1 s."""
+    code = main()
+    if code == SAFETY_STOP_EXIT:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
+SAFETY_STOP_EXIT = 3
+"""The exit status after the robot's safety stop (2 is any other refused input)."""
 
 SIGPIPE_EXIT = 141
 """The shell's status for a tool stopped by SIGPIPE (128 + 13), e.g. under ``| head``."""
@@ -73,4 +91,4 @@ def _stdout_gone() -> bool:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    console()

@@ -8,6 +8,10 @@ class TangleDrakeError(Exception):
     """
 
 
+class SafetyStop(TangleDrakeError):
+    """The station's safety supervisor stopped the robot: the run cannot go on by itself."""
+
+
 SEED_LIMIT = 2**63
 """Seeds are non-negative 63-bit integers: what numpy's generators and torch both accept."""
 

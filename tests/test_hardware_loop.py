@@ -65,6 +65,18 @@ class Probe:
         done = self.loop.controller_diagram.GetOutputPort("script.done")
         return done.Eval(self.loop.controller.get_context())[0] > 0.5
 
+    def commands_received(self) -> int:
+        """Arm commands the robot side has accepted so far."""
+        subscriber = self.loop.robot.diagram.GetSubsystemByName("nextage.command.subscriber")
+        return subscriber.get_output_port().Eval(subscriber.GetMyContextFromRoot(
+            self.loop.robot.simulator.get_context())).valid
+
+    def holding(self) -> bool:
+        """Whether the robot side's watchdog holds the arm."""
+        watchdog = self.loop.robot.diagram.GetSubsystemByName("nextage.command_watchdog")
+        return watchdog.holding(watchdog.GetMyContextFromRoot(
+            self.loop.robot.simulator.get_context()))
+
     def column(self, name: str) -> np.ndarray:
         return np.array([row[name] for row in self.rows])
 
@@ -131,12 +143,21 @@ def test_status_outage_stops_safely_and_a_reset_restarts_from_the_measured_pose(
     assert re.search(r"no valid (NEXTAGE_STATUS|WRIST_FORCE_TORQUE) for 1\d\d ms",
                      report.message), report.message
     assert probe.station("safety.fault")[0] == 1
-    held = probe.station("nextage.position_measured").copy()  # the last status
+    loop.advance(loop.period)  # the robot takes in what was sent before the stop
+    probe.record(loop)
+    sent = probe.commands_received()
 
-    for _ in range(60):  # the robot is back; it is told to hold the measured pose
+    # The robot is back. Its last measured pose is old, so the controller sends nothing more;
+    # the robot side's watchdog holds the arm once the commands have stopped.
+    for _ in range(round(2 * _scenario().hardware.command_timeout / loop.period)):
         loop.advance(loop.period)
         probe.record(loop)
-    np.testing.assert_allclose(probe.rows[-1]["told"], held, atol=1e-12)
+    assert probe.commands_received() == sent
+    assert probe.holding()
+    still = probe.column("q")[-20:]
+    assert np.ptp(still, axis=0).max() < 1e-4
+    # It finished the last command it was given before the stop, and stays there.
+    np.testing.assert_allclose(still[-1], probe.rows[-1]["told"], atol=0.03)
     assert probe.rows[-1]["mode"] is Mode.FAULT
 
     station_context = loop.station.GetMyContextFromRoot(loop.controller.get_context())

@@ -83,7 +83,7 @@ def test_nothing_is_sent_before_fresh_status_then_commands_start_at_the_measured
     assert h.out("gripper_command")[0] == 0.01
 
 
-def test_stale_status_stops_holds_the_measured_pose_and_a_reset_restarts_from_it(caplog):
+def test_stale_status_stops_sending_and_a_reset_restarts_from_the_measured_pose(caplog):
     h = Harness()
     h.running()
     h.gripper = 0.01
@@ -101,17 +101,17 @@ def test_stale_status_stops_holds_the_measured_pose_and_a_reset_restarts_from_it
     assert report.mode is Mode.FAULT
     assert "no valid NEXTAGE_STATUS for 105 ms (timeout 100 ms)" in report.message
     assert "safety stop" in caplog.text and "NEXTAGE_STATUS" in caplog.text
-    assert h.out("send")[0] == 1 and h.out("ready")[0] == 0
-    np.testing.assert_array_equal(h.out("position_command"), h.measured)
-    assert h.out("gripper_command")[0] == 0.01  # a held part is not dropped
+    # The last measured pose is old: nothing more is sent (the robot side's watchdog holds the
+    # arm and keeps the gripper's last command, so a held part is not dropped).
+    assert h.out("send")[0] == 0 and h.out("ready")[0] == 0
 
     h.measured = h.measured + 0.05  # where the robot came to rest
     h.tick(10)  # status is back, but a fault stays until reset
-    assert h.out("fault")[0] == 1
-    np.testing.assert_array_equal(h.out("position_command"), h.measured - 0.05)
+    assert h.out("fault")[0] == 1 and h.out("send")[0] == 0
     h.reset = 1.0
     h.tick()
     assert h.out("report").mode is Mode.RUNNING and h.out("report").message == ""
+    assert h.out("send")[0] == 1
     np.testing.assert_array_equal(h.out("position_command"), h.measured)
 
 
@@ -139,6 +139,7 @@ def test_a_command_past_a_limit_stops_and_holds_the_measured_pose(change, reason
     report = h.out("report")
     assert report.mode is Mode.FAULT
     assert reason in report.message
+    assert h.out("send")[0] == 1  # the status is fresh: the hold is commanded
     np.testing.assert_array_equal(h.out("position_command"), h.measured)
     assert h.out("gripper_command")[0] == h.width
 

@@ -8,9 +8,12 @@ import math
 import time
 
 from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument
+from tangle_drake.errors import TangleDrakeError
 
 CHECK_TIMEOUT = 10.0
 """Simulated seconds ``--check`` allows its scripted motion."""
+LAG_REPORT = 0.05
+"""How much more the simulator must fall behind real time before it says so again, s."""
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -37,6 +40,8 @@ def run(args: argparse.Namespace) -> int:
     from tangle_drake.scenario_files import resolve_scenario
 
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    if not args.duration > 0:
+        raise TangleDrakeError(f"--duration must be positive, got {args.duration:g}")
     scenario = resolve_scenario(args.scenario)
     return _check(scenario, args.seed) if args.check else _serve(scenario, args)
 
@@ -52,11 +57,19 @@ def _serve(scenario, args: argparse.Namespace) -> int:
           f"{channels}")
     sim.simulator.set_target_realtime_rate(1.0)
     start = time.perf_counter()
-    while sim.simulator.get_context().get_time() < args.duration:
-        now = sim.simulator.get_context().get_time()
+    reported_lag = 0.0
+    while (now := sim.simulator.get_context().get_time()) < args.duration:
         sim.simulator.AdvanceTo(min(now + 1.0, args.duration))
-        print(f"t = {sim.simulator.get_context().get_time():.1f} s "
-              f"(wall {time.perf_counter() - start:.1f} s)")
+        now = sim.simulator.get_context().get_time()
+        wall = time.perf_counter() - start
+        line = f"t = {now:.1f} s (wall {wall:.1f} s)"
+        # Ahead of real time the simulator waits; behind it, the lag only grows.
+        if wall - now > reported_lag + LAG_REPORT:
+            reported_lag = wall - now
+            line += (f": behind real time by {reported_lag:.2f} s; a controller sees status "
+                     f"{reported_lag:.2f} s late (its status_timeout is "
+                     f"{scenario.hardware.status_timeout:g} s)")
+        print(line, flush=True)
     return 0
 
 

@@ -42,6 +42,7 @@ from tangle_drake.hardware.lcm_systems import (
     add_publisher,
 )
 from tangle_drake.hardware.messages import check_iiwa_command, check_iiwa_status
+from tangle_drake.hardware.watchdog import CommandWatchdog
 from tangle_drake.robot import HOME
 from tangle_drake.scenario import BinConfig, Scenario
 
@@ -156,25 +157,30 @@ def add_command(builder: DiagramBuilder, lcm: DrakeLcmInterface, name: str,
 def add_robot_side(builder: DiagramBuilder, station: Diagram, lcm: DrakeLcmInterface,
                    name: str, config: JointPositionDriver, scenario: Scenario,
                    held: np.ndarray) -> None:
-    """Commands from LCM into ``station``'s ``{name}.position``; its state back as status.
-    (``held`` is not needed: Drake's receiver holds the measured pose until a command.)"""
+    """Commands from LCM into ``station``'s ``{name}.position`` through the command watchdog;
+    its state back as status. (``held`` is not needed: Drake's receiver holds the measured
+    pose until a command.)"""
     n = station.GetInputPort(f"{name}.position").size()
-    command = add_drake_message(builder, f"{name}.command", add_checked_subscriber(
-        builder, f"{name}.command", config.command_channel, lcmt_iiwa_command,
-        check_iiwa_command(n), lcm), lcmt_iiwa_command)
+    subscriber = add_checked_subscriber(builder, f"{name}.command", config.command_channel,
+                                        lcmt_iiwa_command, check_iiwa_command(n), lcm)
+    command = add_drake_message(builder, f"{name}.command", subscriber, lcmt_iiwa_command)
     receiver = builder.AddNamedSystem(f"{name}.command_receiver",
                                       IiwaCommandReceiver(n, IiwaControlMode.kPositionOnly))
     builder.Connect(command.get_output_port(), receiver.get_message_input_port())
-    builder.Connect(station.GetOutputPort(f"{name}.position_measured"),
-                    receiver.get_position_measured_input_port())
-    builder.Connect(receiver.get_commanded_position_output_port(),
-                    station.GetInputPort(f"{name}.position"))
+    measured = station.GetOutputPort(f"{name}.position_measured")
+    builder.Connect(measured, receiver.get_position_measured_input_port())
+    watchdog = builder.AddNamedSystem(f"{name}.command_watchdog", CommandWatchdog(
+        n, config.command_channel, scenario.hardware.command_timeout,
+        scenario.hardware.status_period))
+    builder.Connect(subscriber.get_output_port(), watchdog.get_input_port(0))
+    builder.Connect(receiver.get_commanded_position_output_port(), watchdog.get_input_port(1))
+    builder.Connect(measured, watchdog.get_input_port(2))
+    builder.Connect(watchdog.get_output_port(), station.GetInputPort(f"{name}.position"))
 
     status = builder.AddNamedSystem(f"{name}.status_sender", IiwaStatusSender(n))
     state = builder.AddNamedSystem(f"{name}.state_split", Demultiplexer([n, n]))
     builder.Connect(station.GetOutputPort(f"{name}.state_measured"), state.get_input_port())
-    builder.Connect(receiver.get_commanded_position_output_port(),
-                    status.get_position_commanded_input_port())
+    builder.Connect(watchdog.get_output_port(), status.get_position_commanded_input_port())
     builder.Connect(state.get_output_port(0), status.get_position_measured_input_port())
     builder.Connect(state.get_output_port(1), status.get_velocity_estimated_input_port())
     # Position control: no torque is commanded (the driver reports zeros, as the iiwa's does).

@@ -78,9 +78,14 @@ class HardwareConfig:
     close or nothing seen, 65535: too far), as most depth-camera drivers do."""
     status_timeout: float = 0.1
     """Arm or gripper status older than this (s) stops the robot: it holds its measured pose."""
-    startup_timeout: float = 5.0
+    command_timeout: float = 0.25
+    """The robot side's watchdog (``hardware-sim``; a real driver's duty in
+    ``docs/hardware.md``): once commands have begun, a command channel silent this long (s)
+    makes the arm hold the pose it measures then, until commands come again."""
+    startup_timeout: float = 30.0
     """Wall-clock seconds the controller waits at start for the first status and image
-    (``HardwareStation.initialize``)."""
+    (``HardwareStation.initialize``): long enough for a robot, or ``hardware-sim`` settling
+    its pile, started after the controller."""
     tracking_tolerance: float = 0.03
     """A joint may trail its command by this much (rad or m) at any speed..."""
     tracking_lag: float = 0.1
@@ -93,14 +98,16 @@ class HardwareConfig:
     def validate(self, where: str) -> None:
         """Refuse values the station cannot run with, naming the field."""
         for name in ("command_period", "status_period", "camera_period", "status_timeout",
+                     "command_timeout",
                      "tracking_tolerance", "tracking_lag", "tracking_time"):
             if not getattr(self, name) > 0:
                 raise TangleDrakeError(f"scenario field '{where}.{name}' must be positive")
         if self.startup_timeout < 0:
             raise TangleDrakeError(f"scenario field '{where}.startup_timeout' must be >= 0")
-        if self.status_timeout < 2 * max(self.command_period, self.status_period):
-            raise TangleDrakeError(f"scenario field '{where}.status_timeout' must be at least "
-                                   "two status and command periods")
+        for name in ("status_timeout", "command_timeout"):
+            if getattr(self, name) < 2 * max(self.command_period, self.status_period):
+                raise TangleDrakeError(f"scenario field '{where}.{name}' must be at least two "
+                                       "status and command periods")
         if self.depth_format not in DEPTH_FORMATS:
             raise TangleDrakeError(f"scenario field '{where}.depth_format' must be one of "
                                    f"{', '.join(DEPTH_FORMATS)}")

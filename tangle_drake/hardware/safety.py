@@ -2,11 +2,13 @@
 
 - No command goes out before a fresh arm and gripper status has arrived; the first one is the
   measured pose, so a (re)started controller never makes the robot jump.
-- Status older than ``hardware.status_timeout``, or a command past a joint's position or speed
-  limit (read from the robot model) or the gripper's stroke, is a fault: the arm is commanded to
-  its last measured pose from then on, the gripper keeps its last command (a stop must not drop
-  a held part), ``safety.fault`` turns 1 so the planner stops its pick sequence, and the reason
-  is logged and reported.
+- A command past a joint's position or speed limit (read from the robot model) or the
+  gripper's stroke is a fault: the arm is commanded to its last measured pose from then on, the
+  gripper keeps its last command (a stop must not drop a held part), ``safety.fault`` turns 1
+  so the planner stops its pick sequence, and the reason is logged and reported.
+- Status older than ``hardware.status_timeout`` is a fault too, but no command goes out after
+  it: the last measured pose is old, and the robot side's command watchdog holds the arm where
+  it is and keeps the gripper's last command (``docs/hardware.md``).
 - A fault stays until ``safety.reset`` rises; then the supervisor waits for fresh status again
   and restarts from the measured pose.
 """
@@ -66,6 +68,9 @@ class _State:
     reset_input: float = 0.0
     lagging_since: float | None = None
     """Since when the arm has trailed its command by more than the tracking bound, s."""
+    hold_by_command: bool = True
+    """In a fault, whether the hold is commanded: not when status went stale, since the last
+    measured pose is old then (the robot side's watchdog holds the arm instead)."""
 
 
 class SafetySupervisor(LeafSystem):
@@ -112,9 +117,7 @@ class SafetySupervisor(LeafSystem):
         self.DeclareVectorOutputPort(
             "gripper_command", 1, lambda c, out: out.SetAtIndex(0, self._get(c).gripper_command),
             prerequisites_of_calc=ticket)
-        self.DeclareVectorOutputPort(
-            "send", 1, lambda c, out: out.SetAtIndex(0, self._mode(c) is not Mode.WAITING),
-            prerequisites_of_calc=ticket)
+        self.DeclareVectorOutputPort("send", 1, self._send, prerequisites_of_calc=ticket)
         self.DeclareVectorOutputPort(
             "fault", 1, lambda c, out: out.SetAtIndex(0, self._mode(c) is Mode.FAULT),
             prerequisites_of_calc=ticket)
@@ -130,6 +133,11 @@ class SafetySupervisor(LeafSystem):
 
     def _mode(self, context: Context) -> Mode:
         return self._get(context).report.mode
+
+    def _send(self, context: Context, out) -> None:
+        state = self._get(context)
+        mode = state.report.mode
+        out.SetAtIndex(0, mode is Mode.RUNNING or (mode is Mode.FAULT and state.hold_by_command))
 
     def _update(self, context: Context, state: State) -> None:
         old = self._get(context)
@@ -148,7 +156,8 @@ class SafetySupervisor(LeafSystem):
         if mode is Mode.FAULT and reset > 0.5 >= old.reset_input:
             log.warning("safety: re-armed at t=%.3f s; waiting for fresh status", t)
             mode = Mode.WAITING
-            new = replace(new, report=replace(new.report, mode=mode, message=""))
+            new = replace(new, hold_by_command=True,
+                          report=replace(new.report, mode=mode, message=""))
         if mode is Mode.WAITING:
             if min(seen) > 0 and max(ages) <= self._timeout:
                 log.info("safety: status is fresh at t=%.3f s; commanding from the measured "
@@ -159,12 +168,14 @@ class SafetySupervisor(LeafSystem):
         elif mode is Mode.RUNNING:
             q, width = self._desired_commands(context, old)
             lagging, new = self._tracking(new, old, q, q_measured, t)
-            problem = self._stale(ages) or self._arm_problem(q, old.arm_command) or \
+            stale = self._stale(ages)
+            problem = stale or self._arm_problem(q, old.arm_command) or \
                 self._gripper_problem(width) or lagging
             if problem:
-                log.error("safety stop at t=%.3f s: %s; holding the measured pose, the pick "
-                          "sequence must stop", t, problem)
-                new = replace(new, arm_command=q_measured.copy(),
+                log.error("safety stop at t=%.3f s: %s; %s, the pick sequence must stop", t,
+                          problem, "sending no more commands" if stale
+                          else "holding the measured pose")
+                new = replace(new, arm_command=q_measured.copy(), hold_by_command=not stale,
                               report=replace(new.report, mode=Mode.FAULT, message=problem))
             else:
                 new = replace(new, arm_command=q, gripper_command=width)

@@ -17,7 +17,7 @@ from pydrake.systems.framework import Context, Diagram, EventStatus
 
 from tangle_drake.bin_model import inside_bin
 from tangle_drake.crops import CropSpec
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.errors import SafetyStop, TangleDrakeError
 from tangle_drake.graphviz import write_graphviz
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.hardware.buses import network_bus_url
@@ -49,6 +49,10 @@ from tangle_drake.tangle_cnn.model import load_tangle_model
 RECORD_FPS = 20.0
 """Frames per second of ``--record``'s replay: smooth enough, and a third of Meshcat's 64
 (a five-pick replay is ~8 MB instead of ~22 MB)."""
+
+HARDWARE_POLL = 0.05
+"""Seconds between looks at the planner against a robot in real time: a safety stop ends the
+demo this soon (in simulation, looks cost time and the episode's longer poll is kept)."""
 
 SIM_TIME_PER_PICK = 60.0
 """Simulated seconds a pick may take before the demo gives up, s (a pick takes ~12 s; closed
@@ -243,7 +247,8 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
     station.initialize(simulator)
     say(f"robot connected; picking {options.picks} part(s)")
     records = _run(simulator, built[0], options.picks, say,
-                   closed=settings.recovery is not None, log=log, pictures=pictures)
+                   closed=settings.recovery is not None, log=log, pictures=pictures,
+                   poll=HARDWARE_POLL)
     say(f"{summarize(records)}; wall time {time.perf_counter() - start:.0f} s")
     return records
 
@@ -274,10 +279,11 @@ def _bin_count(pick: PickDiagram | None, simulator: Simulator, scenario: Scenari
 
 def _run(clock: Clock, pick: PickDiagram, picks: int, say: Callable[[str], None],
          in_bin: Callable[[], str] | None = None, closed: bool = False,
-         log: PickLog | None = None, pictures: PickPictures | None = None) -> list[PickRecord]:
+         log: PickLog | None = None, pictures: PickPictures | None = None,
+         poll: float | None = None) -> list[PickRecord]:
     """Run the picks, reporting each as it ends (and adding it to ``log``); in simulation with
     what is left in the bin (``in_bin``), so a part that a pick pushed over the wall shows up
-    at that pick."""
+    at that pick. ``poll``: seconds between looks at the planner (default: the episode's)."""
     limit = picks * SIM_TIME_PER_PICK * (2 if closed else 1)
 
     def finished(record: PickRecord) -> None:
@@ -287,10 +293,12 @@ def _run(clock: Clock, pick: PickDiagram, picks: int, say: Callable[[str], None]
         if pictures is not None:
             pictures.add(record)
 
-    run: PickRun = run_picks(clock, pick, limit, on_pick=finished)
+    run: PickRun = run_picks(clock, pick, limit, on_pick=finished,
+                             step=None if poll is None else lambda _: poll)
     if run.end is RunEnd.STOPPED:
-        say(f"safety stop: {run.safety_message}; the arm holds its measured pose. Fix the "
-            "cause and run the demo again: it starts from the measured state.")
+        raise SafetyStop(f"safety stop after {len(run.records)} pick(s): "
+                               f"{run.safety_message}; the robot holds where it is. Fix the "
+                               "cause and run the demo again: it starts from the measured state.")
     elif run.end is RunEnd.TIMEOUT:
         say(f"stopped: {picks} pick(s) not done after {limit:.0f} s")
     return run.records
