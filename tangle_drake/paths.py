@@ -7,6 +7,7 @@ paths, so the same scenario files work from a source checkout and from a non-edi
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 from pydrake.multibody.parsing import PackageMap, Parser
@@ -67,3 +68,23 @@ def cache_dir() -> Path:
     path = Path(root) if root else Path.home() / ".cache" / "tangle_drake"
     path.mkdir(parents=True, exist_ok=True)
     return path
+
+
+def check_writable(path: Path, what: str, directory: bool = False) -> None:
+    """Refuse, before any long work, an output ``path`` (a file, or with ``directory`` a
+    directory) that could not be written: an existing path of the other kind, or a nearest
+    existing ancestor that is no writable directory. Creates nothing that stays."""
+    path = Path(path)
+    if path.exists() and path.is_dir() != directory:
+        kind = "a file" if directory else "a directory"
+        raise TangleDrakeError(f"{what} {path}: is {kind}")
+    ancestor = path if directory and path.is_dir() else path.parent
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise TangleDrakeError(f"{what} {path}: {ancestor} is not a directory")
+    try:  # os.access says yes to root on any directory, even a read-only mount
+        tempfile.TemporaryFile(dir=ancestor).close()
+    except OSError as error:
+        raise TangleDrakeError(f"{what} {path}: cannot write in {ancestor}: "
+                               f"{error.strerror}") from error

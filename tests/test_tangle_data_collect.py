@@ -309,3 +309,18 @@ def test_the_tasks_kept_do_not_depend_on_the_number_of_workers(workers, tmp_path
     store = _Store(tmp_path)
     collect_module._run(store, object, (), 2, 0, 5, workers, None, "part", False)
     assert store.tasks == [0, 1, 2]  # 2 + 1 + 2 samples: what one worker keeps
+
+
+def test_the_rate_is_per_worker_that_ran_not_per_worker_asked_for(tmp_path, monkeypatch):
+    # --workers 1000 --samples 3: two tasks of two samples each are all there is to run.
+    made = []
+
+    class Recorded(collect_module.CollectProgress):
+        def __init__(self, *args, **kwargs) -> None:
+            super().__init__(*args, **kwargs)
+            made.append(self)
+
+    monkeypatch.setattr(collect_module, "start_workers", lambda *args: _OutOfOrderWorkers(1000))
+    monkeypatch.setattr(collect_module, "CollectProgress", Recorded)
+    collect_module._run(_Store(tmp_path), object, (), 2, 0, 3, 1000, None, "part", False)
+    assert made[0].workers == 2  # the rate's divisor

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from tangle_drake.commands.arguments import add_scenario_argument
+from tangle_drake.errors import TangleDrakeError
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -27,6 +28,8 @@ def run(args: argparse.Namespace) -> int:
     from tangle_drake.scenario_files import resolve_scenario
     from tangle_drake.station import build_station
 
+    if args.depth < 0:
+        raise TangleDrakeError(f"--depth must be 0 or more, got {args.depth}")
     out = args.out
     if out is None:
         out = Path("station.svg" if graphviz_installed() else "station.dot")

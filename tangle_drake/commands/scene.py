@@ -27,6 +27,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from tangle_drake.paths import check_writable
     from tangle_drake.pile import check_pile
     from tangle_drake.scenario_files import resolve_scenario
     from tangle_drake.scene import make_scene
@@ -35,8 +36,9 @@ def run(args: argparse.Namespace) -> int:
     for warning in check_pile(scenario):
         print(warning)
     out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
+    check_writable(out, "--out", directory=True)
     scene = make_scene(scenario, seed=args.seed, progress=print)
+    out.mkdir(parents=True, exist_ok=True)  # only now: a refused scene leaves no folder
     start = time.perf_counter()
     scene.write(out)
     views = "".join(f", {name}.png" for name in scene.views)

@@ -32,6 +32,7 @@ from torch import nn
 from tqdm import tqdm
 
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.paths import check_writable
 from tangle_drake.tangle_cnn.augment import augment_batch
 from tangle_drake.tangle_cnn.checkpoint import (
     FORMAT_VERSION,
@@ -82,6 +83,7 @@ def train(data_dir: Path, out: Path, settings: TrainSettings, *,
     ``KeyboardInterrupt`` propagates after the last finished epoch is on disk.
     """
     out = Path(out)
+    check_writable(out, "--out")
     dev = resolve_device(device)
     objective = objective_named(settings.objective)
     data = load_training_data(data_dir, normalisation, settings.validation_fraction,

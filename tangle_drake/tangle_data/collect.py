@@ -148,8 +148,7 @@ def _run(store: DatasetStore, factory: type, args: tuple, per_task: int, seed: i
     if store.totals["samples"] >= samples:
         return CollectionResult(store.directory, store.counts(), 0, False, 0.0)
     backend = start_workers(factory, args, workers, ray_address)
-    progress = CollectProgress(name, samples, store.counts(), backend.capacity,
-                               show_progress, shares=shares)
+    progress = CollectProgress(name, samples, store.counts(), show_progress, shares=shares)
     pending: dict[Future, int] = {}
     handed_out: collections.deque[int] = collections.deque()  # not yet stored, in order
     early: dict[int, TaskResult] = {}  # finished, waiting for an earlier task
@@ -163,6 +162,7 @@ def _run(store: DatasetStore, factory: type, args: tuple, per_task: int, seed: i
                 task = next(unfinished)
                 pending[backend.submit(task)] = task
                 handed_out.append(task)
+            progress.running(len(pending))
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in done:
                 task = pending.pop(future)

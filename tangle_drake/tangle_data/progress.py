@@ -13,7 +13,7 @@ class CollectProgress:
     finished task (a bar on a terminal, a line a minute in a log). The command prints a
     summary either way."""
 
-    def __init__(self, description: str, target: int, counts: dict, workers: int,
+    def __init__(self, description: str, target: int, counts: dict,
                  enabled: bool | None = None, line_interval: float = LINE_INTERVAL_S,
                  shares: tuple[tuple[str, str], ...] = LIFT_SHARES) -> None:
         """``shares``: ``(count, words)`` of the task counts shown as shares of the samples
@@ -23,10 +23,16 @@ class CollectProgress:
         self.shares = shares
         self.counted = {key: counts.get(key, 0) for key, _ in shares}
         self.skipped = _skipped(counts)
-        self.workers = workers
+        self.workers = 1
+        """The most tasks that have run at once: the workers that worked, whatever the pool's
+        size (a pool of 1,000 for 3 samples runs one task)."""
         self.progress = Progress(target, self.samples, "sample", description, enabled,
                                  line_interval)
         self.progress.update(0, self._figures())
+
+    def running(self, tasks: int) -> None:
+        """``tasks`` run at once now."""
+        self.workers = max(self.workers, tasks)
 
     def task_done(self, stats: dict) -> None:
         self.samples += stats["samples"]
