@@ -3,6 +3,7 @@ and accepts the meshes a user brings; a small run goes through every stage, and 
 at each stage boundary resumes there without redoing finished work."""
 
 import json
+import shutil
 from dataclasses import replace
 from pathlib import Path
 
@@ -11,9 +12,10 @@ import pytest
 import trimesh
 from cli_run import run_command
 
+from tangle_drake.cli import main
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import catalog, wire
-from tangle_drake.pick.selection import model_part_notice
+from tangle_drake.pick.selection import model_part_notice, trained_model_path
 from tangle_drake.pile import PileReport
 from tangle_drake.scenario_files import resolve_scenario
 from tangle_drake.teach import pipeline
@@ -135,12 +137,116 @@ def _mtimes(directory: Path) -> dict[Path, int]:
     return {p: p.stat().st_mtime_ns for p in directory.glob("shard_*")}
 
 
-def test_the_command_refuses_a_bad_mesh_with_its_reason(meshes, tmp_path, capsys):
-    assert run_command("teach", str(meshes / "sheet_mm.stl"), "--mesh-scale", "0.001",
-                       "--out", str(tmp_path / "sheet")) == 2
+def test_the_command_refuses_a_bad_mesh_with_its_reason(meshes, tmp_path):
+    with pytest.raises(TangleDrakeError, match=r"sheet_mm\.stl is refused: .*encloses no volume"):
+        run_command("teach", str(meshes / "sheet_mm.stl"), "--mesh-scale", "0.001",
+                    "--out", str(tmp_path / "sheet"))
+
+
+def test_a_refusal_is_one_error_line_and_leaves_out_free_for_the_fixed_mesh(meshes, tmp_path,
+                                                                           capsys,
+                                                                           monkeypatch):
+    """The user's mesh is a sheet: ``teach`` says so on stderr, as every command refuses, and
+    leaves ``--out`` as it was (not made, or made by the user and still empty); the user fixes
+    the mesh in place and the same command teaches into the same ``--out``."""
+    mesh = tmp_path / "bracket.stl"
+    shutil.copy(meshes / "sheet_mm.stl", mesh)
+    out = tmp_path / "runs" / "bracket"
+    command = ["teach", str(mesh), "--mesh-scale", "0.001", "--out", str(out)]
+    assert main(command) == 2
+    printed = capsys.readouterr()
+    assert "refused" not in printed.out
+    (line,) = printed.err.splitlines()
+    assert line.startswith(f"error: {mesh} is refused: ") and "encloses no volume" in line
+    assert not (tmp_path / "runs").exists()  # nor the parent teach made for it
+    out.mkdir(parents=True)
+    assert main(command) == 2
+    assert out.is_dir() and not any(out.iterdir())
+
+    def stop_after(stage: str) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(pipeline, "AFTER_STAGE", stop_after)
+    shutil.copy(meshes / "hook_mm.stl", mesh)  # fixed in place: another mesh, the same path
+    capsys.readouterr()
+    assert main(command) == 130
+    assert "check: finished" in capsys.readouterr().out
+    assert json.loads((out / pipeline.STATE_FILE).read_text())["done"] == ["check"]
+
+
+@pytest.mark.parametrize("how", ["the pile", "an error"])
+def test_a_check_refused_after_its_pictures_leaves_out_as_it_found_it(tmp_path, monkeypatch,
+                                                                      how):
+    """The pile refusal comes after the pictures and part file are written: they go too, as
+    does what an earlier, interrupted check of the same run left."""
+    out = tmp_path / "ring"
+
+    def stop_after(stage: str) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(pipeline, "AFTER_STAGE", stop_after)
+    with pytest.raises(KeyboardInterrupt):  # a check that finished: its files and the state
+        Teacher(TeachSettings("c_ring"), out, say=lambda line: None).run()
+    state = json.loads((out / pipeline.STATE_FILE).read_text())
+    (out / pipeline.STATE_FILE).write_text(json.dumps({**state, "done": []}))  # as if cut
+    assert (out / "pile.png").is_file()
+
+    def refuse(check, report):
+        if how == "an error":
+            raise TangleDrakeError("the pile cannot be made")
+        return replace(check, refusal="the simulation cannot pile this part")
+
+    monkeypatch.setattr(pipeline, "settle_verdict", refuse)
+    teacher = Teacher(TeachSettings("c_ring"), out, say=lambda line: None)
+    if how == "an error":
+        with pytest.raises(TangleDrakeError, match="cannot be made"):
+            teacher.run()
+    else:
+        assert "cannot pile" in teacher.run().refusal
+    assert out.is_dir() and not any(out.iterdir())  # it was there when this run began
+
+
+def test_an_interrupted_benchmark_is_not_done_and_the_same_command_finishes_it(tmp_path,
+                                                                              monkeypatch,
+                                                                              capsys):
+    """Ctrl-C in the benchmark's trials (which ``run_bench`` catches to report what finished)
+    stops ``teach`` with 130 and leaves the benchmark and the card unfinished; the same command
+    resumes at the benchmark, not redoing the stages before it. The labels, training and test
+    stand in (the shipped model for the trained one) to keep it to one benchmark trial."""
+    from tangle_drake.bench.trials import TrialWorker
+
+    ran: list[str] = []
+
+    def stand_in(stage: str):
+        def run(self: Teacher) -> None:
+            ran.append(stage)
+            if stage == "train":
+                shutil.copy(trained_model_path("u_hook"), self.model)
+        return run
+
+    for stage in ("labels", "train", "test", "card"):
+        monkeypatch.setattr(Teacher, f"_{stage}", stand_in(stage))
+
+    def ctrl_c(self, task):
+        raise KeyboardInterrupt
+
+    out = tmp_path / "hook"
+    command = ["teach", "u_hook", "--quick", "--workers", "1", "--out", str(out)]
+    with monkeypatch.context() as patch:
+        patch.setattr(TrialWorker, "run_task", ctrl_c)
+        assert main(command) == 130
+    assert capsys.readouterr().err.startswith("interrupted")
+    assert json.loads((out / pipeline.STATE_FILE).read_text())["done"] == [
+        "check", "labels", "train", "test"]
+    assert ran == ["labels", "train", "test"]  # the card did not run
+    assert main(command) == 0
     printed = capsys.readouterr().out
-    assert "refused: " in printed and "encloses no volume" in printed
-    assert "encloses no volume" in (tmp_path / "sheet" / "check.txt").read_text()
+    assert all(f"{stage}: done before" in printed for stage in ("check", "labels", "test"))
+    assert "bench: done before" not in printed
+    assert ran == ["labels", "train", "test", "card"]
+    assert json.loads((out / pipeline.STATE_FILE).read_text())["done"] == list(STAGES)
+    trials = (out / "bench" / "results.jsonl").read_text().splitlines()
+    assert [json.loads(trial)["trial"] for trial in trials] == [0]
 
 
 def test_the_command_takes_the_label_and_test_counts(tmp_path, monkeypatch):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from tangle_drake.commands.arguments import add_seed_argument
@@ -62,10 +63,9 @@ def run(args: argparse.Namespace) -> int:
         check = Teacher(settings, args.out, workers=args.workers, ray=args.ray).run()
     except KeyboardInterrupt:
         print(f"interrupted: what is finished is kept in {args.out}; run the same command "
-              "again to resume")
+              "again to resume", file=sys.stderr)
         return 130
-    if not check.accepted:
-        print(f"refused: {check.refusal}")
-        return 2
+    if not check.accepted:  # one line, like every refusal (--out is left as it was)
+        raise TangleDrakeError(" ".join(f"{args.mesh} is refused: {check.refusal}".split()))
     print(f"taught: {Path(args.out) / 'model.pt'}, its card {Path(args.out) / 'card.md'}")
     return 0

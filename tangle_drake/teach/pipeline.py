@@ -14,8 +14,11 @@ Stages, each with a time budget (:data:`BUDGET_MIN`, 30 minutes with two workers
 ``teach.json`` records the run's settings and the finished stages. The same command again
 skips what is finished and resumes the stage that was interrupted where it stopped (each
 stage is itself resumable: shards, training state, benchmark trials); other settings for
-the same directory are refused. :data:`AFTER_STAGE` is called after each finished stage (a
-test interrupts a run there).
+the same directory are refused. A stage is recorded only once it has run to its end: Ctrl-C
+within one (the benchmark's trials included) propagates and leaves it to the next run. A run
+the check refuses (or whose check raises a refusal) leaves ``--out`` as it found it, so the
+same command with the mesh fixed is a new run, not "other settings". :data:`AFTER_STAGE` is
+called after each finished stage (a test interrupts a run there).
 """
 
 from __future__ import annotations
@@ -46,6 +49,8 @@ BUDGET_MIN = {"check": 0.5, "labels": 16.5, "train": 2.0, "test": 5.0, "bench": 
               "card": 0.5}
 """Each stage's share of the 30 minutes a new part may take on the 2-core machine."""
 STATE_FILE = "teach.json"
+CHECK_FILES = ("part.json", "check.json", "check.txt", "part.png", "pile.png")
+"""What the check stage writes into ``--out``: all a run that no stage finished can hold."""
 AFTER_STAGE: Callable[[str], None] | None = None
 """Called with each stage's name once it is finished and recorded."""
 
@@ -128,6 +133,8 @@ class Teacher:
     def _open(self) -> None:
         identity = self._identity()
         path = self.out / STATE_FILE
+        # The directories this run makes: a refused check takes them away again (_forget).
+        self._made = [d for d in (self.out, *self.out.parents) if not d.exists()]
         if path.exists():
             state = json.loads(path.read_text())
             if state.get("identity") != identity:
@@ -146,8 +153,23 @@ class Teacher:
         tmp.write_text(json.dumps({"identity": self.identity, "done": self.done}, indent=1))
         tmp.replace(self.out / STATE_FILE)
 
+    def _forget(self) -> None:
+        """Undo a run refused before any stage finished, so that it binds no ``--out``: the
+        state and the check's files go (``--out`` was empty when the state was first written,
+        and only the check has run since), and so do the directories this run made, where
+        that leaves them empty. Nothing else is touched."""
+        for name in (STATE_FILE, STATE_FILE + ".tmp", *CHECK_FILES):
+            (self.out / name).unlink(missing_ok=True)
+        for directory in self._made:  # innermost first; rmdir leaves anything not empty
+            try:
+                directory.rmdir()
+            except OSError:
+                break
+
     def run(self) -> PartCheck:
-        """Every stage not yet finished, in order; the check's result (refused: stops)."""
+        """Every stage not yet finished, in order; the check's result (refused: stops, and
+        ``--out`` is left as this run found it). ``KeyboardInterrupt`` propagates from the
+        stage it stopped, which stays unfinished (the next run resumes it)."""
         check = None
         for number, stage in enumerate(STAGES, 1):
             if stage in self.done:
@@ -159,10 +181,16 @@ class Teacher:
             self.say(f"[{number}/{len(STAGES)}] {stage}: budget {BUDGET_MIN[stage]:g} min "
                      f"(about {left:g} min left in all)")
             start = time.perf_counter()
-            result = getattr(self, f"_{stage}")()
+            try:
+                result = getattr(self, f"_{stage}")()
+            except TangleDrakeError:
+                if not self.done:  # refused before any work: nothing to keep
+                    self._forget()
+                raise
             if stage == "check":
                 check = result
                 if not check.accepted:
+                    self._forget()
                     return check
             self.say(f"[{number}/{len(STAGES)}] {stage}: finished in "
                      f"{(time.perf_counter() - start) / 60:.1f} min")
@@ -186,9 +214,10 @@ class Teacher:
         check = check_part(self.part, 1.0, scenario)
         if check.accepted:
             check = self._pile(check, scenario)
+        lines = check.lines()
         check.write(self.out / "check.json")
-        (self.out / "check.txt").write_text("\n".join(check.lines()) + "\n")
-        for line in check.lines():
+        (self.out / "check.txt").write_text("\n".join(lines) + "\n")
+        for line in lines if check.accepted else lines[:-1]:  # a refusal is the caller's error
             self.say(f"  {line}")
         return check
 
@@ -272,7 +301,9 @@ class Teacher:
                                workers=self.workers, ray=self.ray, out=self.out / "bench",
                                seed=self.settings.seed,
                                command=f"tangle-drake teach {self.settings.mesh}")
-        run_bench(options, say=lambda line: self.say(f"  {line}"))
+        outcome = run_bench(options, say=lambda line: self.say(f"  {line}"))
+        if outcome.interrupted:  # run_bench keeps the finished trials and reports on them
+            raise KeyboardInterrupt
 
     def _card(self) -> None:
         from tangle_drake.teach.card import write_card
