@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import cv2
 import numpy as np
@@ -216,3 +217,105 @@ def test_emap_adds_each_candidates_entanglement_and_the_map_under_the_overlay(
     assert plain is not None and mapped is not None and mapped.shape == plain.shape
     assert (mapped != plain).any(axis=2).mean() > 0.3  # the map lies under the hands
     assert (overlays / "heights_grasps.png").is_file()
+
+
+def test_an_image_with_no_valid_pixel_is_named(tmp_path, capsys):
+    save_camera_json(tmp_path / "camera.json", CameraModel(K))
+    blank = tmp_path / "blank.npy"
+    np.save(blank, np.full((K.height, K.width), np.nan, np.float32))
+    code, _, err = run(capsys, blank, "--json", tmp_path / "out.json")
+    assert code == 1
+    assert f"error: {blank}: depth image has no valid pixel" in err
+    (result,) = json.loads((tmp_path / "out.json").read_text())
+    assert result["error"].startswith(f"{blank}: ")
+
+
+def test_a_size_mismatch_names_the_image_and_its_camera(tmp_path, pile, capsys):
+    _, depth = pile
+    camera_json = tmp_path / "camera.json"
+    save_camera_json(camera_json, CameraModel(K))
+    cropped = tmp_path / "cropped.npy"
+    np.save(cropped, depth[:100])
+    code, _, err = run(capsys, cropped)
+    assert code == 1
+    (line,) = [line for line in err.splitlines() if line.startswith("error:")]
+    assert line.startswith(f"error: {cropped}: ")
+    assert str(camera_json) in line
+    assert f"{K.width}x100" in line and f"{K.width}x{K.height}" in line
+
+
+def test_the_batch_summary_says_which_images_failed(tmp_path, pile, capsys):
+    _, depth = pile
+    save_camera_json(tmp_path / "camera.json", CameraModel(K))
+    good, bad, blank = tmp_path / "good.npy", tmp_path / "bad.npy", tmp_path / "blank.npy"
+    np.save(good, depth)
+    bad.write_bytes(b"not numpy")
+    np.save(blank, np.zeros_like(depth))
+    code, out, err = run(capsys, bad, good, blank, "--top-k", 1)
+    assert code == 1 and "good.npy: 1 candidate(s)" in out
+    assert f"error: {bad}: " in err and f"error: {blank}: " in err
+    (summary,) = [line for line in err.splitlines() if "images failed" in line]
+    assert summary == f"2 of 3 images failed: {bad}, {blank}"
+
+
+def _scene_depth_png(tmp_path, depth) -> tuple:
+    """``tangle-drake scene``'s pair: depth.png (16-bit millimetres) and camera.json beside."""
+    save_camera_json(tmp_path / "camera.json", CameraModel(K, top_view_pose(np.zeros(3), FLOOR)))
+    png = tmp_path / "depth.png"
+    cv2.imwrite(str(png), np.rint(np.nan_to_num(depth * 1000.0, nan=0.0)).astype(np.uint16))
+    return png, FLOOR / K.fx  # the camera's pixel at the bin's floor
+
+
+def test_a_depth_png_read_as_a_height_map_is_checked_against_its_camera(
+        tmp_path, pile, capsys):
+    _, depth = pile
+    png, camera_pixel = _scene_depth_png(tmp_path, depth)
+    out_json = tmp_path / "out.json"
+    code, _, err = run(capsys, png, "--height-per-level", 0.0005, "--pixel-size", 0.0005,
+                       "--json", out_json)
+    assert code == 0, err  # a warning, not a refusal: it may be a height map after all
+    (warning,) = [line for line in err.splitlines() if "contradicts its camera" in line]
+    assert warning.startswith(f"warning: {png}: --pixel-size 0.0005")
+    assert f"--pixel-size {camera_pixel:.4g} is consistent" in warning
+    assert "drop --height-per-level and --pixel-size" in warning
+    (result,) = json.loads(out_json.read_text())
+    assert any("contradicts its camera" in w for w in result["warnings"])
+    code, _, err = run(capsys, png, "--height-per-level", 0.0005, "--pixel-size",
+                       round(camera_pixel, 6))
+    assert code == 0 and "contradicts" not in err
+
+
+def test_a_height_map_without_pixel_size_takes_its_cameras(tmp_path, pile, capsys):
+    _, depth = pile
+    png, camera_pixel = _scene_depth_png(tmp_path, depth)
+    out_json = tmp_path / "out.json"
+    code, _, err = run(capsys, png, "--height-per-level", 0.001, "--json", out_json)
+    assert code == 0, err
+    used = re.search(r"no --pixel-size: using ([0-9.e-]+) m, from (\S+):", err)
+    assert used and float(used[1]) == pytest.approx(camera_pixel, rel=0.01)
+    assert used[2] == str(tmp_path / "camera.json")
+    assert json.loads(out_json.read_text())[0]["candidates"]
+    (tmp_path / "camera.json").unlink()  # nothing to take it from: still refused
+    code, _, err = run(capsys, png, "--height-per-level", 0.001)
+    assert code == 1 and f"{png}: a height-map PNG needs --pixel-size" in err
+
+
+def test_grasps_tens_of_metres_away_are_warned_about(tmp_path, pile, capsys):
+    field, depth = pile
+    png = tmp_path / "heights.png"
+    cv2.imwrite(str(png), np.rint(field.heights / 0.0005).astype(np.uint16))
+    code, out, err = run(capsys, png, "--height-per-level", 0.0005, "--pixel-size", 0.001)
+    assert code == 0 and "candidate(s)" in out
+    deepest = max(float(d) for d in re.findall(r"depth=([0-9.]+) m", out))
+    assert deepest > 10
+    assert f"warning: {png}: grasps {deepest:.1f} m deep" in err
+    assert f"65535 x 0.0005 m = {65535 * 0.0005:.1f} m up" in err
+    code, _, err = run(capsys, png, "--height-per-level", 0.0001, "--pixel-size", 0.001)
+    assert code == 0 and "warning" not in err  # 6.6 m down from the top level: no alarm
+    # Metric depth seen from 15 m (a camera that could resolve the fingers from there).
+    far = CameraIntrinsics(K.width, K.height, K.fx * 30, K.fy * 30, K.cx, K.cy)
+    save_camera_json(tmp_path / "camera.json", CameraModel(far))
+    np.save(tmp_path / "far.npy", depth * 30)
+    code, _, err = run(capsys, tmp_path / "far.npy")
+    assert code == 0 and f"warning: {tmp_path / 'far.npy'}: grasps 1" in err
+    assert "m from the camera" in err

@@ -15,6 +15,7 @@ from tangle_drake.graspability import (
     compute_candidates_from_height_map,
     roi_mask,
 )
+from tangle_drake.graspability.inputs import millimetre_depth_scale, sizes_disagree
 from tangle_drake.gripper import DEFAULT_GRIPPER
 
 K = CameraIntrinsics.from_fov_y(64, 48, 45.0)
@@ -123,3 +124,18 @@ def test_bad_parameters():
     deep = GraspabilityParams(insertion_depth_m=DEFAULT_GRIPPER.finger_length)
     with pytest.raises(ValueError, match="finger length"):
         compute_candidates(FLAT, CAMERA, params=deep)
+
+
+def test_millimetre_depth_scale_only_where_the_image_can_be_the_cameras_depth():
+    millimetres = np.full((48, 64), 500, np.uint16)
+    millimetres[:10] = 0  # missing pixels do not count
+    millimetres[20:30, 20:40] = 450  # a part above the floor: the floor is the far end
+    depth_m, size = millimetre_depth_scale(millimetres, K)
+    assert depth_m == pytest.approx(0.5)
+    assert size == pytest.approx(0.5 / K.fx)
+    assert sizes_disagree(0.0005, size) and not sizes_disagree(size * 1.1, size)
+    assert millimetre_depth_scale(millimetres[:40], K) is None  # not the camera's size
+    assert millimetre_depth_scale((millimetres // 2).astype(np.uint8), K) is None  # 8-bit
+    assert millimetre_depth_scale(np.zeros_like(millimetres), K) is None  # nothing seen
+    assert millimetre_depth_scale(millimetres * 60, K) is None  # 30 m: no bin is that far
+    assert millimetre_depth_scale(millimetres, CameraIntrinsics(64, 48, 0, 0, 32, 24)) is None

@@ -6,6 +6,7 @@ what was wrong; nothing downstream has to guard against odd arrays again.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -89,6 +90,53 @@ def height_span(height_map: np.ndarray, height_per_level_m: float) -> float:
     """The height between the map's lowest and highest pixels, m (for a warning)."""
     levels = height_map if height_map.ndim == 2 else height_map[..., 0]
     return float((int(levels.max()) - int(levels.min())) * height_per_level_m)
+
+
+NEAR_CAMERA_M = 0.05
+FAR_CAMERA_M = 10.0
+"""Bin-picking cameras see their bins from between these depths (m). Grasps farther away come
+from a wrong unit or scale, and an image that reads as depth outside them is no depth image."""
+
+PIXEL_SIZE_TOLERANCE = 0.25
+"""A pixel size more than this fraction off the camera's contradicts the camera."""
+
+
+def pixel_size_at(intrinsics: CameraIntrinsics, depth_m: float) -> float | None:
+    """The side of one of the camera's pixels at ``depth_m`` (the geometric mean of its width
+    and height), m; ``None`` for intrinsics that have no pixel size (a focal length <= 0)."""
+    focal = intrinsics.fx * intrinsics.fy
+    if not (intrinsics.fx > 0 and intrinsics.fy > 0 and math.isfinite(focal)):
+        return None
+    return depth_m / math.sqrt(focal)
+
+
+def millimetre_depth_scale(levels: np.ndarray,
+                           intrinsics: CameraIntrinsics) -> tuple[float, float] | None:
+    """``(the bin's depth, a pixel's size there)`` in metres, reading a 16-bit grey image as the
+    camera's depth in millimetres (0 = missing; as ``tangle-drake scene`` and most depth-camera
+    drivers write it), or ``None`` where it cannot be that: not 16-bit grey, not the camera's
+    size, or no valid pixel at a depth a bin-picking camera works at.
+
+    The bin's depth is its far end (the 99th percentile of the valid depths: the floor). A
+    height-map reading of such an image must agree with the camera on the pixel size there.
+    """
+    if (levels.dtype != np.uint16 or levels.ndim != 2
+            or levels.shape != (intrinsics.height, intrinsics.width)):
+        return None
+    valid = levels[levels > 0]
+    if valid.size == 0:
+        return None
+    depth_m = float(np.percentile(valid, 99)) / 1000.0
+    size = pixel_size_at(intrinsics, depth_m)
+    if size is None or not NEAR_CAMERA_M <= depth_m <= FAR_CAMERA_M:
+        return None
+    return depth_m, size
+
+
+def sizes_disagree(given_m: float, expected_m: float,
+                   tolerance: float = PIXEL_SIZE_TOLERANCE) -> bool:
+    """Whether two pixel sizes differ by more than ``tolerance`` (of the smaller one)."""
+    return max(given_m, expected_m) > (1 + tolerance) * min(given_m, expected_m)
 
 
 def millimetres_to_depth(millimetres: np.ndarray) -> np.ndarray:
