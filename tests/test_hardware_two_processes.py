@@ -4,6 +4,7 @@ makes (only ``lo``, a multicast route on it: nothing leaves it). Where the names
 made, the tests skip and say why."""
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -99,7 +100,9 @@ def test_a_bridge_that_stops_mid_pick_ends_the_controller_naming_the_stale_chann
     assert result["connected"], result["controller_log"]
     log = result["controller_log"]
     assert result["controller_rc"] == SAFETY_STOP_EXIT, log
-    assert "error: safety stop" in log and "no valid GANTRY_STATUS" in log, log
+    # Every channel of the stopped bridge goes stale; the first past its timeout is named.
+    assert re.search(r"error: safety stop .*no valid (GANTRY_STATUS|WSG_STATUS|"
+                     r"WRIST_FORCE_TORQUE) for 1\d\d ms", log), log
     assert result["controller_seconds"] <= timeout + 1.0
     # Nothing is commanded once the status is stale (a little slack for scheduling).
     late = [t for t in result["command_times"] if t > result["killed_at"] + timeout + 0.2]
