@@ -1,0 +1,403 @@
+"""The README and the pages under docs/ say true things: their links lead somewhere, the
+commands and options they show exist, the scenarios they name load, the runnable snippets
+run, and the README's headline figures are those of the committed results they link to."""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import hashlib
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tangle_drake.cli import build_parser
+from tangle_drake.scenario import load_scenario
+
+ROOT = Path(__file__).resolve().parent.parent
+README = ROOT / "README.md"
+DOCS = sorted((ROOT / "docs").rglob("*.md"))
+CARD = ROOT / "tangle_drake" / "trained" / "README.md"
+PAGES = [README, *DOCS, CARD]
+"""Every page a user reads: the README, docs/ (generated reports included) and the model card."""
+
+README_MAX_LINES = 300
+HEADLINE_WITHIN = 80
+HEADLINE_START = "<!-- headline -->"
+HEADLINE_END = "<!-- /headline -->"
+RUNNABLE = "<!-- runnable -->"
+SNIPPET_TIMEOUT_S = 120
+
+SCENARIO_FOLDERS = ("diagrams", "docs/clearing/scenarios")
+"""Where the scenarios a committed result ran on live (found by the result's sha256)."""
+BENCHMARK_KINDS = {"floating_gripper.yaml": "one layer", "dense_bin.yaml": "dense bin"}
+"""What the headline calls a pick benchmark, by the scenario it ran on."""
+
+
+def relative(page: Path) -> str:
+    return str(page.relative_to(ROOT))
+
+
+# --- (a) links --------------------------------------------------------------------------------
+
+LINK = re.compile(r"!?\[[^\]]*\]\(\s*<?([^)\s>]+)>?(?:\s+\"[^\"]*\")?\s*\)")
+FENCE = re.compile(r"^\s*(```|~~~)")
+
+
+def prose(text: str) -> str:
+    """``text`` without its fenced code blocks and inline code (links there are not links)."""
+    lines, fenced = [], False
+    for line in text.splitlines():
+        if FENCE.match(line):
+            fenced = not fenced
+            continue
+        if not fenced:
+            lines.append(re.sub(r"`[^`]*`", "", line))
+    return "\n".join(lines)
+
+
+def relative_links(page: Path) -> list[str]:
+    """The page's links that point at a file of this repository (anchors stripped)."""
+    targets = []
+    for target in LINK.findall(prose(page.read_text())):
+        if re.match(r"^[a-zA-Z][a-zA-Z0-9+.-]*:", target) or target.startswith("#"):
+            continue  # a URL (https:, mailto:) or an anchor in the same page
+        targets.append(target.split("#", 1)[0])
+    return targets
+
+
+@pytest.mark.parametrize("page", PAGES, ids=relative)
+def test_every_relative_link_resolves_to_a_file(page):
+    broken = [target for target in relative_links(page) if not (page.parent / target).exists()]
+    assert not broken, f"{relative(page)}: links to nothing: {broken}"
+
+
+def test_the_docs_index_links_every_page():
+    index = ROOT / "docs" / "index.md"
+    linked = {(index.parent / target).resolve() for target in relative_links(index)}
+    pages = [page for page in (ROOT / "docs").glob("*.md") if page != index]
+    pages += [ROOT / "docs" / "results" / "history.md"]
+    missing = [relative(page) for page in pages if page.resolve() not in linked]
+    assert not missing, f"docs/index.md does not link {missing}"
+
+
+# --- (b) commands and options ------------------------------------------------------------------
+
+def code_blocks(text: str, languages: tuple[str, ...] | None = None) -> list[list[str]]:
+    """The fenced code blocks of ``text`` (their lines), of the given info strings if any."""
+    blocks, current, language = [], None, ""
+    for line in text.splitlines():
+        fence = FENCE.match(line)
+        if fence and current is None:
+            current, language = [], line.strip()[3:].strip().lower()
+        elif fence:
+            if languages is None or language in languages:
+                blocks.append(current)
+            current = None
+        elif current is not None:
+            current.append(line)
+    return blocks
+
+
+COMMAND_START = re.compile(r"^(?:[A-Z_][A-Z0-9_]*=\S*\s+)*(?:\S*/)?tangle-drake(?:\s|$)")
+OPTION = re.compile(r"(?<![\w-])--[a-zA-Z][a-zA-Z0-9-]*")
+
+
+def command_lines(text: str) -> list[str]:
+    """The ``tangle-drake`` command lines of the fenced code blocks, continuation lines
+    (a trailing backslash, or an indented line after a command) joined to them and comments
+    dropped."""
+    commands = []
+    for block in code_blocks(text):
+        current = None
+        for line in block:
+            body = re.sub(r"(^|\s)#.*$", "", line).rstrip()
+            if current is not None and (current.endswith("\\") or
+                                        (line[:1].isspace() and body.strip())):
+                current = current.rstrip("\\").rstrip() + " " + body.strip()
+                continue
+            if current is not None:
+                commands.append(current)
+                current = None
+            if COMMAND_START.match(body.strip()):
+                current = body.strip()
+        if current is not None:
+            commands.append(current)
+    return [command.rstrip("\\").rstrip() for command in commands]
+
+
+@functools.cache
+def parsers() -> dict[str | None, argparse.ArgumentParser]:
+    """The CLI's parsers, built in-process: ``None`` for the top level, else by subcommand."""
+    parser = build_parser()
+    found: dict[str | None, argparse.ArgumentParser] = {None: parser}
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            found.update(action.choices)
+    return found
+
+
+def option_strings(parser: argparse.ArgumentParser) -> set[str]:
+    return {option for action in parser._actions for option in action.option_strings}
+
+
+def documented_commands() -> list[tuple[str, str]]:
+    return [(relative(page), command) for page in PAGES
+            for command in command_lines(page.read_text())]
+
+
+def test_the_docs_show_commands():
+    pages = {page for page, _ in documented_commands()}
+    for page in ("README.md", "docs/pick-demo.md", "docs/benchmark.md",
+                 "docs/data-and-training.md", "docs/teach.md", "docs/graspability.md"):
+        assert page in pages, f"{page} shows no tangle-drake command"
+
+
+@pytest.mark.parametrize(("page", "command"), documented_commands(),
+                         ids=[f"{page}: {command[:60]}" for page, command in
+                              documented_commands()])
+def test_every_documented_subcommand_and_option_exists(page, command):
+    words = re.sub(r"[\[\]|]", " ", command.split("tangle-drake", 1)[1]).split()
+    subcommand = next((word for word in words if not word.startswith("-")), None)
+    known = parsers()
+    if words and words[0].startswith("-"):
+        subcommand = None  # tangle-drake --version
+    assert subcommand in known, f"{page}: no subcommand {subcommand!r} in `{command}`"
+    unknown = sorted(set(OPTION.findall(command)) - option_strings(known[subcommand]))
+    assert not unknown, f"{page}: `tangle-drake {subcommand}` has no {unknown}"
+
+
+def test_the_command_parser_reads_what_the_pages_write():
+    text = "\n".join(["```bash", "tangle-drake bench [--methods a b] [--parts u_hook] \\",
+                      "    --out results/x   # a comment --not-an-option",
+                      "OMP_NUM_THREADS=1 tangle-drake train --data d",
+                      "tangle-drake demo [--picks 5]",
+                      "                  [--seed 3]",
+                      "python tools/x.py --no",
+                      "```", "tangle-drake scene --not-in-a-block"])
+    assert command_lines(text) == [
+        "tangle-drake bench [--methods a b] [--parts u_hook] --out results/x",
+        "OMP_NUM_THREADS=1 tangle-drake train --data d",
+        "tangle-drake demo [--picks 5] [--seed 3]"]
+
+
+# --- (c) scenarios ------------------------------------------------------------------------------
+
+SCENARIO_PATH = re.compile(r"(?<![\w/.-])((?:diagrams|docs/clearing/scenarios)/[\w./-]+?\.yaml)")
+
+
+def documented_scenarios() -> list[str]:
+    return sorted({path for page in PAGES for path in SCENARIO_PATH.findall(page.read_text())})
+
+
+def test_the_docs_name_scenarios():
+    assert "diagrams/pick_demo.yaml" in documented_scenarios()
+
+
+@pytest.mark.parametrize("path", documented_scenarios())
+def test_every_named_scenario_loads(path):
+    load_scenario(ROOT / path)
+
+
+# --- (d) the README's shape ---------------------------------------------------------------------
+
+def headline() -> tuple[int, list[str]]:
+    """The line number (1-based) of the headline's marker and the lines up to its end."""
+    lines = README.read_text().splitlines()
+    assert lines.count(HEADLINE_START) == 1, f"README.md needs one {HEADLINE_START} marker"
+    start = lines.index(HEADLINE_START)
+    assert HEADLINE_END in lines[start:], f"README.md: {HEADLINE_END} after the headline"
+    end = lines.index(HEADLINE_END, start)
+    return start + 1, lines[start + 1:end]
+
+
+def test_the_readme_is_short():
+    count = len(README.read_text().splitlines())
+    assert count <= README_MAX_LINES, f"README.md has {count} lines, more than {README_MAX_LINES}"
+
+
+def test_the_headline_table_is_near_the_top():
+    start, lines = headline()
+    end = start + len(lines) + 1
+    assert end <= HEADLINE_WITHIN, f"the headline runs to line {end}, past {HEADLINE_WITHIN}"
+    assert any(line.startswith("|") for line in lines), "the headline holds no table"
+
+
+def test_the_readme_keeps_its_two_set_up_commands():
+    text = README.read_text()
+    assert "make demo" in text and "make test" in text
+    first = text.index("make demo")
+    assert first < text.index(HEADLINE_START), "the set-up commands come before the results"
+
+
+# --- (e) the headline's figures -----------------------------------------------------------------
+
+def percent(rate: float) -> str:
+    return f"{100 * rate:.1f} %"
+
+
+def interval(low: float, high: float, scale: float = 100.0, digits: int = 1) -> str:
+    return f"[{scale * low:.{digits}f}, {scale * high:.{digits}f}]"
+
+
+@functools.cache
+def scenario_by_sha256(sha256: str) -> Path:
+    """The committed scenario file a result ran on, found by the digest it recorded."""
+    for folder in SCENARIO_FOLDERS:
+        for path in sorted((ROOT / folder).glob("*.yaml")):
+            if hashlib.sha256(path.read_bytes()).hexdigest() == sha256:
+                return path
+    raise AssertionError(f"no scenario in {SCENARIO_FOLDERS} has sha256 {sha256}")
+
+
+def pile_size(summary: dict) -> int:
+    config = summary["config"]
+    if config.get("pile_size"):
+        return int(config["pile_size"])
+    scenario = load_scenario(scenario_by_sha256(config["scenario_sha256"]))
+    return sum(part.count for part in scenario.pile.parts)
+
+
+def pick_row(link: str, summary: dict, methods: list[str]) -> str:
+    """The headline row of a pick benchmark (``summary.json``): first picks with exactly one
+    part over every part, per method; ``–`` where the benchmark did not run the method."""
+    overall = {row["method"]: row for row in summary["rates"] if row["part"] == "all"}
+    piles = {row["n"] for row in overall.values()}
+    assert len(piles) == 1, f"{link}: methods ran on different piles"
+    kind = BENCHMARK_KINDS[scenario_by_sha256(summary["config"]["scenario_sha256"]).name]
+    label = (f"[{kind}]({link}): {piles.pop()} piles of {pile_size(summary)} parts, "
+             f"{summary['trials_per_part']} per part")
+    cells = [f"{percent(overall[m]['rate'])} {interval(overall[m]['lower'], overall[m]['upper'])}"
+             if m in overall else "–" for m in methods]
+    return "| " + " | ".join([label, *cells]) + " |"
+
+
+def clearing_row(link: str, summary: dict, method: str) -> str:
+    """The headline row of a clearing (``clear_summary.json``): deliveries with exactly one
+    part, parts delivered over the parts in the bins, parts lost, parts per hour."""
+    assert not summary["open_loop"], f"{link}: the headline shows the closed loop"
+    figures = summary["overall"][method]
+    scenario_path = scenario_by_sha256(summary["config"]["scenario_sha256"])
+    if summary["mode"] == "arm":
+        nextage = load_scenario(scenario_path).model_drivers["nextage"]
+        carrier = (f"Nextage arm, planned at {nextage.planning_velocity_limit:.1f} rad/s and "
+                   f"{nextage.planning_acceleration_limit:.1f} rad/s² per joint, "
+                   f"{100 * nextage.planning_slow_speed:g} cm/s next to the pile")
+    else:
+        carrier = "gantry (floating gripper)"
+    parts_per_bin = figures["parts"] / figures["bins"]
+    assert parts_per_bin == int(parts_per_bin), f"{link}: bins of different sizes"
+    label = f"[{carrier}]({link}): {figures['bins']} bins of {int(parts_per_bin)} parts"
+    low, high = figures["parts_per_hour_ci"]
+    share = percent(figures["delivered"] / figures["parts"])
+    cells = [f"{figures['exactly_one']} of {figures['deliveries']}",
+             f"{figures['delivered']} ÷ {figures['parts']} ({share})",
+             f"{figures['lost']}",
+             f"{figures['parts_per_hour']:.0f} {interval(low, high, scale=1.0, digits=0)}"]
+    return "| " + " | ".join([label, *cells]) + " |"
+
+
+def tables(lines: list[str]) -> list[list[str]]:
+    """The Markdown tables among ``lines``, each as its lines (header first)."""
+    found, current = [], []
+    for line in [*lines, ""]:
+        if line.startswith("|"):
+            current.append(line)
+        elif current:
+            found.append(current)
+            current = []
+    return found
+
+
+def backticked(cell: str) -> str | None:
+    match = re.search(r"`([^`]+)`", cell)
+    return match.group(1) if match else None
+
+
+def expected_row(row: str, header: list[str]) -> str:
+    """What ``row`` of the headline must read, made from the result file its link leads to."""
+    match = re.search(r"\]\(([^)]+)\)", row)
+    assert match, f"a headline row without a link to its result: {row}"
+    link = match.group(1)
+    folder = (README.parent / link).parent
+    if (folder / "summary.json").is_file():
+        methods = [backticked(cell) for cell in header[1:]]
+        assert all(methods), f"name each method column in backticks: {header}"
+        return pick_row(link, json.loads((folder / "summary.json").read_text()), methods)
+    if (folder / "clear_summary.json").is_file():
+        summary = json.loads((folder / "clear_summary.json").read_text())
+        method = backticked(header[0])
+        assert method in summary["overall"], f"{link}: no method {method!r} in its summary"
+        return clearing_row(link, summary, method)
+    raise AssertionError(f"{link}: no summary.json or clear_summary.json beside it")
+
+
+def cells(line: str) -> list[str]:
+    return [cell.strip() for cell in line.strip().strip("|").split("|")]
+
+
+def test_every_headline_figure_is_its_result_files():
+    _, lines = headline()
+    linked = []
+    for table in tables(lines):
+        header = cells(table[0])
+        for row in table[2:]:
+            assert row == expected_row(row, header)
+            linked.append(re.search(r"\]\(([^)]+)\)", row).group(1))
+    assert sorted(linked) == sorted([
+        "docs/benchmark/report.md", "docs/dense_comparison/report.md",
+        "docs/clearing/closed/clear_report.md", "docs/clearing/arm_brisk_6cm/clear_report.md"])
+
+
+def test_the_headline_names_the_benchmarks_methods():
+    _, lines = headline()
+    header = cells(tables(lines)[0][0])
+    assert [backticked(cell) for cell in header[1:]] == [
+        "random", "graspability", "cnn", "harmonic", "success-cnn", "outcome"]
+    assert "bins cleared" not in "\n".join(lines).lower()
+
+
+# --- runnable snippets --------------------------------------------------------------------------
+
+def runnable_snippets() -> list[tuple[str, str]]:
+    """The ```python blocks a ``<!-- runnable -->`` comment marks (the comment alone on the
+    line before the fence, blank lines allowed between)."""
+    found = []
+    for page in PAGES:
+        lines = page.read_text().splitlines()
+        for number, line in enumerate(lines):
+            if line.strip() != RUNNABLE:
+                continue
+            fence = next(i for i in range(number + 1, len(lines)) if lines[i].strip())
+            assert lines[fence].strip() == "```python", f"{relative(page)}:{number + 1}"
+            end = next(i for i in range(fence + 1, len(lines)) if FENCE.match(lines[i]))
+            found.append((f"{relative(page)}:{fence + 1}", "\n".join(lines[fence + 1:end])))
+    return found
+
+
+def python_snippets() -> list[tuple[str, str]]:
+    return [(f"{relative(page)} #{number}", "\n".join(block)) for page in PAGES
+            for number, block in enumerate(code_blocks(page.read_text(), ("python",)), 1)]
+
+
+@pytest.mark.parametrize(("where", "code"), python_snippets(),
+                         ids=[where for where, _ in python_snippets()])
+def test_every_python_snippet_is_python(where, code):
+    """Snippets too costly to run (a pile to settle, a station of your own) still parse."""
+    compile(code, where, "exec")
+
+
+def test_some_snippets_are_runnable():
+    assert runnable_snippets()
+
+
+@pytest.mark.parametrize(("where", "code"), runnable_snippets(),
+                         ids=[where for where, _ in runnable_snippets()])
+def test_a_runnable_snippet_runs(where, code):
+    run = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
+                         text=True, timeout=SNIPPET_TIMEOUT_S)
+    assert run.returncode == 0, f"{where} failed:\n{run.stderr[-3000:]}"
