@@ -70,6 +70,35 @@ def cache_dir() -> Path:
     return path
 
 
+PLACEHOLDER = "DATA"
+"""What a recorded path outside the repository and the working directory is written under."""
+
+
+def shown_path(path: str | os.PathLike) -> str:
+    """``path`` as a result records it (a report's command, an evaluation's dataset, a
+    checkpoint's data): with nothing of the machine that made it, so that committed results
+    name no one's home or scratch directories, and a reader still sees what to pass.
+
+    A relative path stays as given. An absolute one inside the repository (the directory
+    holding the ``tangle_drake`` package) is written relative to it, else one inside the
+    working directory relative to that, else as its name under :data:`PLACEHOLDER`
+    (``/scratch/runs/u_hook_test`` -> ``DATA/u_hook_test``).
+    """
+    path = Path(path)
+    if not path.is_absolute():
+        return path.as_posix()
+    path = Path(os.path.normpath(path))
+    try:
+        bases = (_PACKAGE_DIR.parent, Path.cwd())
+    except OSError:  # the working directory was removed
+        bases = (_PACKAGE_DIR.parent,)
+    for candidate in (path, path.resolve()):
+        for base in bases:
+            if candidate.is_relative_to(base):
+                return candidate.relative_to(base).as_posix()
+    return f"{PLACEHOLDER}/{path.name}"
+
+
 def check_writable(path: Path, what: str, directory: bool = False) -> None:
     """Refuse, before any long work, an output ``path`` (a file, or with ``directory`` a
     directory) that could not be written: an existing path of the other kind, or a nearest

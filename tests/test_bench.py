@@ -27,7 +27,7 @@ from tangle_drake.cli import main
 from tangle_drake.crops import CropSpec
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
-from tangle_drake.paths import diagrams_dir
+from tangle_drake.paths import diagrams_dir, shown_path
 from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, classify_lift
 from tangle_drake.pick.selection import RuleSelector
@@ -228,7 +228,8 @@ def test_the_quick_benchmark_writes_its_report(quick_run, untrained_model):
         assert (out / name).is_file(), name
     summary = json.loads((out / "summary.json").read_text())
     assert summary["command"] == (f"tangle-drake bench --methods random graspability "
-                                  f"model:{untrained_model} --quick --out {out}")
+                                  f"model:{shown_path(untrained_model)} --quick "
+                                  f"--out {shown_path(out)}")
     overall = {r["method"]: r for r in summary["rates"] if r["part"] == "all"}
     assert set(overall) == {"random", "graspability", next(m for m in overall
                                                            if m.startswith("model:"))}
@@ -259,7 +260,8 @@ def test_the_quick_benchmark_runs_a_pick_outcome_model_with_its_own_rule(tmp_pat
     identity = json.loads((out / IDENTITY_FILE).read_text())
     assert [m["rule"] for m in identity["methods"]["u_hook"]] == ["graspability",
                                                                   "success-harmonic"]
-    picks = [p for t in trials_in(out) for p in t["picks"] if p["method"] == f"model:{model}"]
+    name = f"model:{shown_path(model)}"
+    picks = [p for t in trials_in(out) for p in t["picks"] if p["method"] == name]
     assert len(picks) == 2 and all(p.get("p_model") is not None for p in picks
                                    if p["result"] != "failure")  # its P(one part)
 

@@ -1,6 +1,7 @@
 """The README and the pages under docs/ say true things: their links lead somewhere, the
 commands and options they show exist, the scenarios they name load, the runnable snippets
-run, and the README's headline figures are those of the committed results they link to."""
+run, and the README's headline figures are those of the committed results they link to; and no
+file of the repository names a directory of the machine that made it."""
 
 from __future__ import annotations
 
@@ -359,6 +360,33 @@ def test_the_headline_names_the_benchmarks_methods():
     assert [backticked(cell) for cell in header[1:]] == [
         "random", "graspability", "cnn", "harmonic", "success-cnn", "outcome"]
     assert "bins cleared" not in "\n".join(lines).lower()
+
+
+# --- (f) no machine's paths ----------------------------------------------------------------------
+
+MACHINE_PATH = re.compile(r"(?<![\w.~/-])/(?:work|root|home)/[^\s\"'`]*")
+"""An absolute path under a machine's own directories (URLs' paths follow a host, not this)."""
+
+
+def tracked_text_files() -> list[Path]:
+    """The repository's tracked files outside tests/ that are text (no NUL byte)."""
+    listed = subprocess.run(["git", "ls-files", "-z"], cwd=ROOT, capture_output=True)
+    if listed.returncode != 0:
+        pytest.skip("not a git checkout")
+    files = [ROOT / name for name in listed.stdout.decode().split("\0")
+             if name and not name.startswith("tests/")]
+    return [path for path in files if path.is_file() and b"\0" not in path.read_bytes()[:8000]]
+
+
+def test_no_file_names_a_path_of_the_machine_that_made_it():
+    """Results record paths as ``tangle_drake.paths.shown_path`` writes them: relative, or
+    under ``DATA/``."""
+    found = [f"{path.relative_to(ROOT)}:{number}: {match.group(0)}"
+             for path in tracked_text_files()
+             for number, line in enumerate(path.read_bytes().decode(errors="replace")
+                                           .splitlines(), 1)
+             for match in MACHINE_PATH.finditer(line)]
+    assert not found, "absolute paths of a machine:\n" + "\n".join(found[:20])
 
 
 # --- runnable snippets --------------------------------------------------------------------------

@@ -18,6 +18,7 @@ from tangle_drake.bench.methods import parse_method
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.dataset import load_samples
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.paths import shown_path
 from tangle_drake.pick.selection import resolve_tangle_choice
 from tangle_drake.tangle_cnn.card import classes_test_header, classes_test_row, validation_row
 from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
@@ -242,8 +243,9 @@ def test_bench_warns_when_a_model_was_trained_on_the_piles_it_tests(tmp_path):
         return [n for n in found if "was trained on" in n]
 
     assert notices(1) == []  # trial 0's pile is not among its training piles
-    assert notices(3) == [f"warning: {model} was trained on 1 of the 3 u_hook piles this run "
-                          f"tests model:{model} on: its figures there are not a test; collect "
+    shown = shown_path(model)
+    assert notices(3) == [f"warning: {shown} was trained on 1 of the 3 u_hook piles this run "
+                          f"tests model:{shown} on: its figures there are not a test; collect "
                           "its data with another --seed"]
 
 
@@ -261,7 +263,7 @@ def test_the_ceiling_tool_scores_a_models_first_picks_on_pick_data(models, picks
     done = subprocess.run([sys.executable, str(tool), str(data), "--model", str(models["success"]),
                            "--json", str(figures)], capture_output=True, text=True, check=True)
     row = json.loads(figures.read_text())["synthetic_bars"]
-    choice = row["models"][str(models["success"])]
+    choice = row["models"][shown_path(models["success"])]  # as results record paths
     assert choice["rule"] == "success-cnn" and "| success-cnn |" in done.stdout
     assert row["graspability"] < choice["success"] == pytest.approx(row["oracle"])
     assert choice["closed"] == pytest.approx(1.0)

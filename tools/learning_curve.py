@@ -34,6 +34,7 @@ import torch
 
 from tangle_drake.dataset import MANIFEST, finished_tasks, load_samples, read_shard, shard_name
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.paths import shown_path
 from tangle_drake.tangle_cnn.evaluate import class_probabilities
 from tangle_drake.tangle_cnn.metrics import binary_metrics, roc_auc
 from tangle_drake.tangle_cnn.model import load_tangle_model
@@ -163,10 +164,13 @@ def run(args: argparse.Namespace) -> None:
               f" | {'–' if point['train_s'] is None else round(point['train_s'])} |")
     for point in points:
         del point["p_failure"]
+        point["model"] = shown_path(point["model"])
     if against is not None:
         del against["p_failure"]
+        against["model"] = shown_path(against["model"])
     (args.out / "curve.json").write_text(json.dumps(
-        {"data": str(args.data), "test": str(args.test), "objective": args.objective,
+        {"data": shown_path(args.data), "test": shown_path(args.test),
+         "objective": args.objective,
          "test_samples": len(truth),
          "points": points, **({"against": against} if against else {})}, indent=1) + "\n")
 

@@ -22,6 +22,7 @@ from pathlib import Path
 
 from tangle_drake.dataset import load_samples, read_manifest
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.paths import shown_path
 from tangle_drake.pick.selection import trained_model_path
 from tangle_drake.tangle_cnn.objectives import DEFAULT_RULES, OBJECTIVES, check_serves
 from tangle_drake.tangle_cnn.selection import EMAP_RULES, MODEL_RULES
@@ -59,8 +60,8 @@ def main() -> int:
         except (TangleDrakeError, ValueError) as error:
             print(f"error: {error}", file=sys.stderr)
             return 2
-        rows[part] = asdict(ceiling) | {"models": {model: asdict(choice) for p, model, choice
-                                                   in choices if p == part}}
+        rows[part] = asdict(ceiling) | {"models": {shown_path(model): asdict(choice)
+                                                   for p, model, choice in choices if p == part}}
         ranks = ", ".join(f"{r}: {100 * s:.0f} %" for r, (s, _) in ceiling.by_rank.items())
         print(f"| {part} | {ceiling.piles} | "
               f"{rate(ceiling.graspability, ceiling.graspability_interval)} | "

@@ -46,6 +46,7 @@ from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem, Outpu
 from tangle_drake.bin_model import inner_corners
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability.roi import bin_roi
+from tangle_drake.paths import shown_path
 from tangle_drake.pick.selection import default_rule, model_objective, trained_model_path
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import camera_model
@@ -120,9 +121,10 @@ def parse_method(text: str) -> Method:
         if not path.is_file():
             raise TangleDrakeError(f"method {text!r}: model file not found: {path}")
         if own_rule:
-            return Method(f"{MODEL_PREFIX}{path}", default_rule(path), path.resolve())
+            return Method(f"{MODEL_PREFIX}{shown_path(path)}", default_rule(path),
+                          path.resolve())
         check_serves(prefix, model_objective(path), path)
-        return Method(f"{prefix}:{path}", prefix, path.resolve())
+        return Method(f"{prefix}:{shown_path(path)}", prefix, path.resolve())
     if text in SHIPPED_MODEL_METHODS:
         objective = SHIPPED_MODEL_METHODS[text]
         return Method(text, DEFAULT_RULES[objective.name], shipped=objective)

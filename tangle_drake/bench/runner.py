@@ -37,6 +37,7 @@ from tangle_drake.bench.trials import (
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.parts.library import part_digest
+from tangle_drake.paths import shown_path
 from tangle_drake.pick.diagram import (
     closed_loop_settings,
     default_graspability_params,
@@ -131,7 +132,7 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
     parts = []
     if options.parts is None and options.scenario is not None and not options.quick:
         names = list(dict.fromkeys((e.part, e.mesh_scale) for e in scenario.pile.parts))
-        notices.append(f"notice: parts from the scenario {path}: "
+        notices.append(f"notice: parts from the scenario {shown_path(path)}: "
                        f"{', '.join(part for part, _ in names)} (pass --parts for others)")
         parts = [PartSpec(part, load_part(part, mesh_scale=scale).name, scale)
                  for part, scale in names]
@@ -160,7 +161,7 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
                 f"one (data from {objective.data}, then `tangle-drake train --objective "
                 f"{objective.name}`) and install it there, or pass model:PATH")
         if missing:
-            paths = dict.fromkeys(str(m.model_for(spec.name)) for m in missing)
+            paths = dict.fromkeys(shown_path(m.model_for(spec.name)) for m in missing)
             notices.append(f"notice: no trained model for part {spec.name!r} "
                            f"({', '.join(paths)}): methods "
                            f"{', '.join(m.name for m in missing)} skipped on it")
@@ -202,7 +203,7 @@ def overlap_warnings(config: BenchConfig, trials: int) -> list[str]:
             path = method.model_for(spec.name)
             trained = set((read_checkpoint(path).get("data") or {}).get("pile_seeds") or ())
             if shared := tested & trained:
-                warnings.append(f"warning: {path} was trained on {len(shared)} of the "
+                warnings.append(f"warning: {shown_path(path)} was trained on {len(shared)} of the "
                                 f"{len(tested)} {spec.name} piles this run tests {method.name} "
                                 "on: its figures there are not a test; collect its data with "
                                 "another --seed")
@@ -221,7 +222,7 @@ def identity(config: BenchConfig) -> dict:
     return {
         "format": 1, "mode": config.mode, "seed": config.seed, "pile_size": config.pile_size,
         "scenario_sha256": hashlib.sha256(config.scenario_text.encode()).hexdigest(),
-        "parts": [{"name": p.name, "part": p.part, "mesh_scale": p.mesh_scale,
+        "parts": [{"name": p.name, "part": shown_path(p.part), "mesh_scale": p.mesh_scale,
                    "sha256": part_digest(p.part)}
                   for p in config.parts],
         "methods": {part: [{"name": m.name, "rule": m.rule,

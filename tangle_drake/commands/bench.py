@@ -77,22 +77,30 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def command_line(args: argparse.Namespace) -> str:
     """The command as given (the options that make the results; not --workers or --ray,
-    which change only how fast), for the report."""
+    which change only how fast), for the report, its paths as ``shown_path`` writes them."""
+    from tangle_drake.paths import shown_path
+
+    def method(text: str) -> str:  # model:PATH and RULE:PATH name a file
+        prefix, colon, rest = text.partition(":")
+        return f"{prefix}:{shown_path(rest)}" if colon and rest else text
+
     words = ["tangle-drake", "bench"]
-    for option in ("methods", "parts"):
-        if getattr(args, option) is not None:
-            words += [f"--{option}", *getattr(args, option)]
+    if args.methods is not None:
+        words += ["--methods", *map(method, args.methods)]
+    if args.parts is not None:
+        words += ["--parts", *map(shown_path, args.parts)]
     for option, default in (("trials", None), ("mode", None), ("seed", 0),
                             ("scenario", None), ("mesh_scale", 1.0)):
         value = getattr(args, option)
         if value != default:
+            value = shown_path(value) if option == "scenario" else value
             words += [f"--{option.replace('_', '-')}", str(value)]
     words += ["--clear"] if args.clear else []
     words += ["--open-loop"] if args.open_loop else []
     words += ["--quick"] if args.quick else []
     words += ["--gallery"] if args.gallery else []
     words += ["--perturb"] if args.perturb else []
-    return shlex.join([*words, "--out", str(args.out)])
+    return shlex.join([*words, "--out", shown_path(args.out)])
 
 
 def run(args: argparse.Namespace) -> int:

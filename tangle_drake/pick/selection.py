@@ -18,6 +18,7 @@ from pydrake.systems.framework import Context, LeafSystem
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import load_part
 from tangle_drake.parts.library import PART_FILE_SUFFIX
+from tangle_drake.paths import shown_path
 from tangle_drake.tangle_cnn.objectives import (
     DEFAULT_OBJECTIVE,
     DEFAULT_RULES,
@@ -111,8 +112,9 @@ def model_part_notice(model: Path, part: str) -> str | None:
         Path(part).stem  # a part file names its mesh's part
     if trained_on is None or str(trained_on) == name:
         return None
-    return (f"warning: the tangle model {model} was trained on part {trained_on!r}, and the "
-            f"pile is of {name!r}: its P(not tangled) is not this part's")
+    return (f"warning: the tangle model {shown_path(model)} was trained on part "
+            f"{trained_on!r}, and the pile is of {name!r}: its P(not tangled) is not this "
+            "part's")
 
 
 class RuleSelector(LeafSystem):

@@ -155,6 +155,8 @@ def evaluate_model(model: TangleModel, directory: Path,
                    progress: Callable[[int], None] | None = None) -> Evaluation:
     """Score every sample of ``directory`` (or, for the model's own training data, its
     validation piles) with ``model``; ``progress(n)`` is told of each batch of n samples."""
+    from tangle_drake.paths import shown_path  # imports pydrake
+
     directory = Path(directory)
     causes = CAUSE_FIELDS if set(CAUSE_FIELDS) <= stored_fields(directory) else ()
     objective = model.objective
@@ -172,7 +174,8 @@ def evaluate_model(model: TangleModel, directory: Path,
     correct = int(((p_tangled > 0.5) == truth.astype(bool)).sum())
     several = class_metrics(classes, probabilities) if len(objective.classes) > 2 else {}
     return Evaluation(
-        data=str(directory), data_part=manifest.get("part"), model_part=model.info.get("part"),
+        data=shown_path(directory), data_part=manifest.get("part"),
+        model_part=model.info.get("part"),
         scope=scope, samples=len(rows), tangled=int(truth.sum()),
         piles=len(np.unique(samples["pile_seed"][rows])),
         accuracy=float(metrics["accuracy"]), accuracy_interval=wilson(correct, len(rows)),

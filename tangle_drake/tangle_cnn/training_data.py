@@ -98,6 +98,8 @@ def load_training_data(directory: Path, normalisation: Normalisation,
     out each part's classes as ``balance`` says (``split.BALANCES``); ``target_mask`` alone
     decides whether the inputs get the target-mask channel (fitted to the data's hand and
     crop), whatever mask ``normalisation`` held."""
+    from tangle_drake.paths import shown_path  # imports pydrake
+
     directory = Path(directory)
     samples, crop, manifest = load_checked_samples(directory, objective=objective)
     crops, labels = samples["crop"], samples["label"].astype(np.int64)
@@ -124,7 +126,7 @@ def load_training_data(directory: Path, normalisation: Normalisation,
     normalisation = replace(normalisation, target_mask=_target_mask(gripper, crop, directory)
                             if target_mask else None)
     summary = {
-        "path": str(directory),
+        "path": shown_path(directory),
         "fingerprint": fingerprint(samples),
         "samples": len(labels),
         "tangled": int(len(labels) - counts[0]),  # not the good class, as ``Evaluation``'s

@@ -34,6 +34,7 @@ import trimesh
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, load_part
+from tangle_drake.paths import shown_path
 from tangle_drake.pick.selection import trained_model_path
 from tangle_drake.tangle_cnn.train_settings import TRAIN_THREADS
 from tangle_drake.teach.check import (
@@ -300,7 +301,7 @@ class Teacher:
                                parts=[self.part], trials=self.settings.bench_trials,
                                workers=self.workers, ray=self.ray, out=self.out / "bench",
                                seed=self.settings.seed,
-                               command=f"tangle-drake teach {self.settings.mesh}")
+                               command=f"tangle-drake teach {shown_path(self.settings.mesh)}")
         outcome = run_bench(options, say=lambda line: self.say(f"  {line}"))
         if outcome.interrupted:  # run_bench keeps the finished trials and reports on them
             raise KeyboardInterrupt
