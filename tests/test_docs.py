@@ -1,14 +1,14 @@
 """The README and the pages under docs/ say true things: their links lead somewhere, the
 commands and options they show exist, the scenarios they name load, the runnable snippets
-run, and the README's headline figures are those of the committed results they link to; and no
-file of the repository names a directory of the machine that made it."""
+run, and every generated result table (the README's headline among them) is what
+``tools/results_tables.py`` makes from the committed result files; and no file of the
+repository names a directory of the machine that made it."""
 
 from __future__ import annotations
 
 import argparse
 import functools
-import hashlib
-import json
+import importlib.util
 import re
 import subprocess
 import sys
@@ -23,6 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
 DOCS = sorted((ROOT / "docs").rglob("*.md"))
 CARD = ROOT / "tangle_drake" / "trained" / "README.md"
+TOOLS = ROOT / "tools"
 PAGES = [README, *DOCS, CARD]
 """Every page a user reads: the README, docs/ (generated reports included) and the model card."""
 
@@ -33,10 +34,6 @@ HEADLINE_END = "<!-- /headline -->"
 RUNNABLE = "<!-- runnable -->"
 SNIPPET_TIMEOUT_S = 120
 
-SCENARIO_FOLDERS = ("diagrams", "docs/clearing/scenarios")
-"""Where the scenarios a committed result ran on live (found by the result's sha256)."""
-BENCHMARK_KINDS = {"floating_gripper.yaml": "one layer", "dense_bin.yaml": "dense bin"}
-"""What the headline calls a pick benchmark, by the scenario it ran on."""
 
 
 def relative(page: Path) -> str:
@@ -235,71 +232,18 @@ def test_the_readme_keeps_its_two_set_up_commands():
     assert first < text.index(HEADLINE_START), "the set-up commands come before the results"
 
 
-# --- (e) the headline's figures -----------------------------------------------------------------
+# --- (e) the result tables ---------------------------------------------------------------------
 
-def percent(rate: float) -> str:
-    return f"{100 * rate:.1f} %"
-
-
-def interval(low: float, high: float, scale: float = 100.0, digits: int = 1) -> str:
-    return f"[{scale * low:.{digits}f}, {scale * high:.{digits}f}]"
-
-
-@functools.cache
-def scenario_by_sha256(sha256: str) -> Path:
-    """The committed scenario file a result ran on, found by the digest it recorded."""
-    for folder in SCENARIO_FOLDERS:
-        for path in sorted((ROOT / folder).glob("*.yaml")):
-            if hashlib.sha256(path.read_bytes()).hexdigest() == sha256:
-                return path
-    raise AssertionError(f"no scenario in {SCENARIO_FOLDERS} has sha256 {sha256}")
+def load_tool():
+    """``tools/results_tables.py`` as a module (registered, as its dataclasses need)."""
+    spec = importlib.util.spec_from_file_location("results_tables", TOOLS / "results_tables.py")
+    tool = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = tool
+    spec.loader.exec_module(tool)
+    return tool
 
 
-def pile_size(summary: dict) -> int:
-    config = summary["config"]
-    if config.get("pile_size"):
-        return int(config["pile_size"])
-    scenario = load_scenario(scenario_by_sha256(config["scenario_sha256"]))
-    return sum(part.count for part in scenario.pile.parts)
-
-
-def pick_row(link: str, summary: dict, methods: list[str]) -> str:
-    """The headline row of a pick benchmark (``summary.json``): first picks with exactly one
-    part over every part, per method; ``–`` where the benchmark did not run the method."""
-    overall = {row["method"]: row for row in summary["rates"] if row["part"] == "all"}
-    piles = {row["n"] for row in overall.values()}
-    assert len(piles) == 1, f"{link}: methods ran on different piles"
-    kind = BENCHMARK_KINDS[scenario_by_sha256(summary["config"]["scenario_sha256"]).name]
-    label = (f"[{kind}]({link}): {piles.pop()} piles of {pile_size(summary)} parts, "
-             f"{summary['trials_per_part']} per part")
-    cells = [f"{percent(overall[m]['rate'])} {interval(overall[m]['lower'], overall[m]['upper'])}"
-             if m in overall else "–" for m in methods]
-    return "| " + " | ".join([label, *cells]) + " |"
-
-
-def clearing_row(link: str, summary: dict, method: str) -> str:
-    """The headline row of a clearing (``clear_summary.json``): deliveries with exactly one
-    part, parts delivered over the parts in the bins, parts lost, parts per hour."""
-    assert not summary["open_loop"], f"{link}: the headline shows the closed loop"
-    figures = summary["overall"][method]
-    scenario_path = scenario_by_sha256(summary["config"]["scenario_sha256"])
-    if summary["mode"] == "arm":
-        nextage = load_scenario(scenario_path).model_drivers["nextage"]
-        carrier = (f"Nextage arm, planned at {nextage.planning_velocity_limit:.1f} rad/s and "
-                   f"{nextage.planning_acceleration_limit:.1f} rad/s² per joint, "
-                   f"{100 * nextage.planning_slow_speed:g} cm/s next to the pile")
-    else:
-        carrier = "gantry (floating gripper)"
-    parts_per_bin = figures["parts"] / figures["bins"]
-    assert parts_per_bin == int(parts_per_bin), f"{link}: bins of different sizes"
-    label = f"[{carrier}]({link}): {figures['bins']} bins of {int(parts_per_bin)} parts"
-    low, high = figures["parts_per_hour_ci"]
-    share = percent(figures["delivered"] / figures["parts"])
-    cells = [f"{figures['exactly_one']} of {figures['deliveries']}",
-             f"{figures['delivered']} ÷ {figures['parts']} ({share})",
-             f"{figures['lost']}",
-             f"{figures['parts_per_hour']:.0f} {interval(low, high, scale=1.0, digits=0)}"]
-    return "| " + " | ".join([label, *cells]) + " |"
+TABLES = load_tool()
 
 
 def tables(lines: list[str]) -> list[list[str]]:
@@ -319,36 +263,64 @@ def backticked(cell: str) -> str | None:
     return match.group(1) if match else None
 
 
-def expected_row(row: str, header: list[str]) -> str:
-    """What ``row`` of the headline must read, made from the result file its link leads to."""
-    match = re.search(r"\]\(([^)]+)\)", row)
-    assert match, f"a headline row without a link to its result: {row}"
-    link = match.group(1)
-    folder = (README.parent / link).parent
-    if (folder / "summary.json").is_file():
-        methods = [backticked(cell) for cell in header[1:]]
-        assert all(methods), f"name each method column in backticks: {header}"
-        return pick_row(link, json.loads((folder / "summary.json").read_text()), methods)
-    if (folder / "clear_summary.json").is_file():
-        summary = json.loads((folder / "clear_summary.json").read_text())
-        method = backticked(header[0])
-        assert method in summary["overall"], f"{link}: no method {method!r} in its summary"
-        return clearing_row(link, summary, method)
-    raise AssertionError(f"{link}: no summary.json or clear_summary.json beside it")
-
-
 def cells(line: str) -> list[str]:
     return [cell.strip() for cell in line.strip().strip("|").split("|")]
 
 
-def test_every_headline_figure_is_its_result_files():
+def test_the_headline_is_a_generated_table():
+    assert (README, "headline") in TABLES.generated_blocks()
+
+
+@pytest.mark.parametrize(("page", "name"), TABLES.generated_blocks(),
+                         ids=[f"{relative(page)}: {name}"
+                              for page, name in TABLES.generated_blocks()])
+def test_every_generated_table_is_its_result_files(page, name):
+    """What ``python tools/results_tables.py --check`` checks, one block at a time."""
+    stale = [block for block in TABLES.stale(page) if block == f"{relative(page)}: {name}"]
+    assert not stale, (f"{stale[0]} disagrees with its result files: run "
+                       "`python tools/results_tables.py` and commit the page")
+
+
+def test_the_table_check_names_a_block_that_disagrees_with_its_files():
+    """One figure changed by hand is named by its block, and the tool writes it back; the
+    tool run on what it wrote changes nothing."""
+    text = README.read_text()
     _, lines = headline()
-    linked = []
-    for table in tables(lines):
-        header = cells(table[0])
-        for row in table[2:]:
-            assert row == expected_row(row, header)
-            linked.append(re.search(r"\]\(([^)]+)\)", row).group(1))
+    figure = tables(lines)[0][2]
+    changed = re.sub(r"(\d+\.)(\d) %", lambda m: f"{m[1]}{(int(m[2]) + 1) % 10} %", figure,
+                     count=1)
+    edited = text.replace(figure, changed, 1)
+    assert edited != text
+    assert TABLES.stale(README, edited) == ["README.md: headline"]
+    made, _ = TABLES.render(README, edited)
+    assert TABLES.render(README, made) == (made, [])
+    assert changed not in made
+
+
+def test_the_tables_tool_checks_the_committed_pages(capsys):
+    assert TABLES.main(["--check"]) == 0, capsys.readouterr().out
+
+
+def test_a_docs_page_marks_its_tables_by_name():
+    """A ``<!-- table: NAME -->`` block on a page under docs/ gets the table with links from
+    that page; a name the tool does not know is an error naming the page and line."""
+    page = ROOT / "docs" / "some_page.md"
+    text = "Before.\n\n<!-- table: headline -->\nby hand\n<!-- /table -->\n\nAfter.\n"
+    made, changed = TABLES.render(page, text)
+    assert changed == ["docs/some_page.md: headline"]
+    assert made.startswith("Before.\n\n<!-- table: headline -->\n| first pick")
+    assert made.endswith("<!-- /table -->\n\nAfter.\n") and "by hand" not in made
+    assert "[one layer](benchmark/report.md)" in made
+    with pytest.raises(TABLES.TableError, match=r"some_page.md:1: no table named 'nothing'"):
+        TABLES.render(page, "<!-- table: nothing -->\n<!-- /table -->\n")
+    with pytest.raises(TABLES.TableError, match="without its <!-- /table -->"):
+        TABLES.render(page, "<!-- table: headline -->\n")
+
+
+def test_the_headline_links_its_four_results():
+    _, lines = headline()
+    linked = [re.search(r"\]\(([^)]+)\)", row).group(1)
+              for table in tables(lines) for row in table[2:]]
     assert sorted(linked) == sorted([
         "docs/benchmark/report.md", "docs/dense_comparison/report.md",
         "docs/clearing/closed/clear_report.md", "docs/clearing/arm_brisk_6cm/clear_report.md"])
