@@ -99,3 +99,24 @@ def test_a_part_file_picks_with_the_model_teach_wrote_beside_it(tmp_path):
     shutil.copy(trained_model_path("c_ring"), tmp_path / "model.pt")
     choice = resolve_tangle_choice(str(part_file))
     assert (choice.model, choice.rule, choice.notice) == (tmp_path / "model.pt", "harmonic", None)
+
+
+def _strings(value: object):
+    """Every string inside a checkpoint's nested dicts and lists."""
+    if isinstance(value, str):
+        yield value
+    elif isinstance(value, dict):
+        for item in value.values():
+            yield from _strings(item)
+    elif isinstance(value, list | tuple):
+        for item in value:
+            yield from _strings(item)
+
+
+def test_no_shipped_checkpoint_names_a_path_of_the_machine_that_made_it():
+    import torch
+
+    for path in sorted(TRAINED_DIR.glob("*.pt")):
+        checkpoint = torch.load(path, weights_only=True)
+        absolute = [text for text in _strings(checkpoint) if text.startswith("/")]
+        assert absolute == [], f"{path.name}: {absolute}"
