@@ -54,7 +54,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def console() -> None:
     """The ``tangle-drake`` console script. After a safety stop the process ends at once:
-    nothing is left to clean up, and the interpreter's teardown (torch's alone takes ~0.4 s)
+    nothing is left to clean up, and the interpreter's teardown (torch's above all)
     would keep a controller whose robot has stopped running past ``status_timeout`` + 1 s."""
     code = main()
     if code == SAFETY_STOP_EXIT:

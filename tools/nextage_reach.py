@@ -8,14 +8,13 @@ rotation is free: the wrist roll LARM_JOINT5 turns about the tool axis and spans
 collide with itself does not count.
 
     python tools/nextage_reach.py --evaluate 0.34 0.22 0.93   # one bin placement
-    python tools/nextage_reach.py --search                    # rank placements (~7 min)
+    python tools/nextage_reach.py --search                    # rank placements (minutes)
 
-Measured: a bin with its inner-floor centre at world (0.34, 0.22) and its floor top at
-z = 0.93 is reached at all 14025 points of a 1 cm grid with the default margins (9135 of 9135
-without the spatial ones). The 2 cm grid misses 2 of 1989 there: local IK failures, solved on
-the finer grid. Lower or higher floors lose points (2 cm grid, default margins: floor 0.89 →
-99.1 %, 0.87 → 97.8 %, 0.99 → 97.7 %): pointing straight down, the short arm's workspace is a
-narrow band around its waist height (WAIST at 0.97).
+The bin with its inner-floor centre at world (0.34, 0.22) and its floor top at z = 0.93 was
+chosen with it: there the gripper reaches every point of the floor, while lower or higher
+floors lose points, as pointing straight down the short arm's workspace is a narrow band
+around its waist height (WAIST at 0.97). The figures are in ``docs/results/history.md``
+(Clearing whole bins with the Nextage arm).
 """
 
 from __future__ import annotations

@@ -18,9 +18,9 @@ parts the grasp cannot reach frozen (:mod:`tangle_drake.pile_freeze`, the auto-l
 rule measured from the grasp: centres farther than ``freeze_beyond_radii + 1`` bounding radii,
 since the target's centre lies within one radius of its grasp). Keeping the whole pile locked
 through the descent until the fingers touch it was tried and dropped: a pile frozen for that
-second instead of creeping is another pile: it changed 3 of 15 E-shape picks' outcomes, where
-moving the grasp 0.1 mm changed none. ``tools/fast_pick_agreement.py`` checks the fast rig
-against the full one.
+second instead of creeping is another pile, and it changed outcomes where moving the grasp a
+tenth of a millimetre did not (``docs/data-and-training.md``, Measured).
+``tools/fast_pick_agreement.py`` checks the fast rig against the full one.
 """
 
 from __future__ import annotations
@@ -49,7 +49,8 @@ from tangle_drake.tangle_data.perturb import ContactScaler, PickPhysics
 from tangle_drake.tangle_data.settings import LiftSettings
 
 FLOATING_SIM_LIMIT = 20.0
-"""Simulated seconds a floating-gripper pick may take (one takes ~5 s)."""
+"""Simulated seconds a floating-gripper pick may take: several times what one takes, so only a
+pick that is stuck reaches it."""
 _POLL = 0.05
 """Simulated seconds between checks whether the pick is over, s."""
 _UNTOUCHED = (Mode.SETTLE, Mode.PERCEIVE, Mode.APPROACH)

@@ -4,7 +4,7 @@ Simulation: the plant's reaction force at the weld above the sensed body (Drake 
 the child body, at the joint's child frame, in that frame; here it is turned into world
 coordinates), sampled every ``period``, low-pass filtered as a sensor's firmware does, with
 noise, a random-walk bias and the stream's resolution. (Working at the sensor's rate rather
-than at every plant step keeps it cheap: ~0.75 ms a sample, ~0.3 s of CPU in a 4 s pick.)
+than at every plant step keeps it cheap: a small share of a pick's computation.)
 The noise is drawn from the seed and the sample's index, so a restored context replays it
 exactly. Hardware station:
 ``lcmt_force_torque`` in, checked. Robot side: the simulated samples out as

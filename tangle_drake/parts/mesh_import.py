@@ -20,9 +20,9 @@ MESH_SUFFIXES: tuple[str, ...] = (".obj", ".stl", ".ply")
 # CoACD settings, chosen to be quick for small parts: concavity threshold 0.05 (of the part's
 # size) is CoACD's default quality; at most 16 pieces keeps contact cheap; a smaller, shallower
 # tree search (10 nodes, 60 iterations, depth 2 instead of 20/150/3) and a coarser sampling
-# resolution (1000 instead of 2000) cut the time 3-5x (measured on the wire parts' tubes:
-# 1.7-3.2 s instead of 5-13 s, with about as many pieces, 6-11, whose hulls exceed the part's
-# volume by 4-10 % either way); a fixed seed makes the pieces, hence the cached files, reproducible.
+# resolution (1000 instead of 2000) cut the time several-fold on the wire parts' tubes, with
+# about as many pieces and hulls as close to the part's volume (figures: docs/performance.md);
+# a fixed seed makes the pieces, hence the cached files, reproducible.
 # "auto" preprocessing remeshes inputs that are not manifold: that is how CoACD copes with a
 # mesh our repair could not close, slowly (tens of seconds or more).
 COACD_PARAMS: dict[str, object] = {

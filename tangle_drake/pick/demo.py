@@ -47,16 +47,16 @@ from tangle_drake.station import SimulatedStation, build_station, camera_model
 from tangle_drake.tangle_cnn.model import load_tangle_model
 
 RECORD_FPS = 20.0
-"""Frames per second of ``--record``'s replay: smooth enough, and a third of Meshcat's 64
-(a five-pick replay is ~8 MB instead of ~22 MB)."""
+"""Frames per second of ``--record``'s replay: smooth enough, and a third of Meshcat's 64,
+which makes the replay file about that much smaller."""
 
 HARDWARE_POLL = 0.05
 """Seconds between looks at the planner against a robot in real time: a safety stop ends the
 demo this soon (in simulation, looks cost time and the episode's longer poll is kept)."""
 
 SIM_TIME_PER_PICK = 60.0
-"""Simulated seconds a pick may take before the demo gives up, s (a pick takes ~12 s; closed
-loop, a delivery may take several grasps, each with its weighing: twice this)."""
+"""Simulated seconds a pick may take before the demo gives up, s (several times what a pick
+takes; closed loop, a delivery may take several grasps, each with its weighing: twice this)."""
 
 
 @dataclass(frozen=True)

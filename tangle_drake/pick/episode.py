@@ -105,7 +105,7 @@ class PickEpisode:
         self.pick = pick
         self.simulator = Simulator(pick.diagram)
         self._initial = self.simulator.get_context().Clone()
-        # Render once now: the renderer's first image costs ~100 ms more than the next ones
+        # Render once now: the renderer's first image costs more than the next ones
         # (VTK sets up its pipeline), which the first pick's perception would pay.
         station = pick.station
         station.GetOutputPort("camera.depth_image").Eval(

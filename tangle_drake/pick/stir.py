@@ -50,7 +50,8 @@ class StirSettings:
     force_limit: float = 30.0
     """A sweep whose wrist feels more than this across (N) has met something it must not
     push (a part jammed against a wall, the wall itself): it goes back the way it came.
-    Pushing loose parts along took 1-16 N in the simulation (15 U-hooks, E-shapes, C-rings)."""
+    Pushing loose parts along takes well under this in the simulation
+    (``docs/closed-loop.md``)."""
 
     def __post_init__(self) -> None:
         for name in ("min_height", "min_area", "length", "speed", "force_limit"):

@@ -1,17 +1,17 @@
 """The tool poses of one pick, derived from the grasp candidate's pose ``X_WT``.
 
-The grasp itself goes a few millimetres deeper than the candidate (never into the bin's
-floor): the graspability index puts the fingertips just below the middle of the top wire,
-where the compliant pads' lower edge squeezes a round wire out under the tips (measured: 6 of
-8 first picks came up empty; 1 of 8 with 4 mm more). Above the grasp: a pre-grasp back along
-the approach axis, high enough that the fingertips clear the bin's rim; a point a few
-centimetres above the grasp where the slow part of the descent starts; after the grasp, the
-lift pose above the pre-grasp, moved in from the walls where the pre-grasp is near one: a
-part hanging from the gripper (or from the part it holds), or dropping off it at the top of
-the lift where the load is weighed and shaken, then comes down in the bin, not over its wall
-(in bin clearing, most lost parts left the bin during a lift). The parallel
-gripper is symmetric, so a grasp turned 180° about the approach axis is the same grasp: the
-twin whose closing direction is nearer the tool's current one needs the least wrist travel.
+The grasp itself goes a few millimetres deeper than the candidate (never into the bin's floor):
+the graspability index puts the fingertips just below the middle of the top wire, where the
+compliant pads' lower edge squeezes a round wire out under the tips, so at the candidate's own
+depth most grasps come up empty (``docs/results/history.md``). Above the grasp: a pre-grasp
+back along the approach axis, high enough that the fingertips clear the bin's rim; a point a
+few centimetres above the grasp where the slow part of the descent starts; after the grasp, the
+lift pose above the pre-grasp, moved in from the walls where the pre-grasp is near one: a part
+hanging from the gripper (or from the part it holds), or dropping off it at the top of the lift
+where the load is weighed and shaken, then comes down in the bin, not over its wall (in bin
+clearing, most lost parts left the bin during a lift). The parallel gripper is symmetric, so a
+grasp turned 180° about the approach axis is the same grasp: the twin whose closing direction
+is nearer the tool's current one needs the least wrist travel.
 """
 
 from __future__ import annotations

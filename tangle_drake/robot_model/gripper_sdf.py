@@ -19,7 +19,7 @@ penetration allowance: 40 N sinks a pad ~0.8 mm into a part of the same stiffnes
 
 At a 2 ms SAP step this is not what decides a grasp of a light part: SAP's near-rigid
 regularisation makes a ~10 g wire squeezed between the fingers far softer than this, and with
-point contact the fingers crush through it (measured). Hence the hydroelastic pads below.
+point contact the fingers crush through it and it drops. Hence the hydroelastic pads below.
 """
 
 FINGER_HYDROELASTIC_MODULUS = 1.0e7

@@ -18,9 +18,10 @@ from tangle_drake.tangle_cnn.normalise import Normalisation
 from tangle_drake.tangle_cnn.objectives import Objective, checkpoint_objective, prior_weights
 
 INFERENCE_THREADS = 1
-"""Threads of one prediction. A handful of 96 px crops is too little work to share: on two
-cores, two threads took 8 ms where one takes 2-4 ms, and 200 ms whenever another process (the
-physics, a benchmark worker) held the other core, as torch's threads wait on each other."""
+"""Threads of one prediction. A handful of 96 px crops is too little work to share: two
+threads are slower than one, and far slower whenever another process (the physics, a
+benchmark worker) holds the other core, as torch's threads wait on each other (figures:
+``docs/performance.md``)."""
 
 
 def reweighted(probabilities: torch.Tensor, weights: torch.Tensor | None) -> torch.Tensor:

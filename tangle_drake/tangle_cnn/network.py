@@ -97,7 +97,7 @@ class TangleNet(nn.Module):
                 nn.init.kaiming_normal_(module.weight, nonlinearity="relu")
                 if module.bias is not None:
                     nn.init.zeros_(module.bias)
-        # Channels-last tensors make oneDNN's convolutions and pools ~30 % faster on a CPU.
+        # Channels-last tensors make oneDNN's convolutions and pools faster on a CPU.
         self.to(memory_format=torch.channels_last)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
@@ -106,7 +106,7 @@ class TangleNet(nn.Module):
 
 def _conv(inputs: int, outputs: int, shape: dict) -> tuple[nn.Module, ...]:
     """Convolution, batch normalisation, ReLU: without the normalisation (and with PyTorch's
-    default initialisation) the differences between crops shrank ~1000x on their way through
+    default initialisation) the differences between crops all but vanished on their way through
     the eight layers, and the network learned nothing from real data."""
     return nn.Conv2d(inputs, outputs, bias=False, **shape), nn.BatchNorm2d(outputs), nn.ReLU()
 

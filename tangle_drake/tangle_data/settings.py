@@ -42,7 +42,7 @@ class LiftSettings:
     the target's are locked in place during the lift. The target rises straight up and
     every part lies within one bounding radius of its centre, so it can never touch them;
     only a part it drags along could, and would then meet an immovable neighbour instead of
-    a movable one. Each step costs ~40 % less. 0 keeps every part free."""
+    a movable one. Each step costs markedly less. 0 keeps every part free."""
     early_exit: bool = True
     """End the lift as soon as its record cannot change any more (the target and what it
     lifted are above every part they could touch, nothing is on its way up), and the hold

@@ -68,8 +68,8 @@ class TeachSettings:
     samples: int = 1800
     """Labels to collect: the learning curves (``docs/learning_curve``) are flat within the
     training's own spread past 1,000 for the U-hook and past 1,800 for the E-shape (rarer
-    tangles), and 1,800 of a mesh part leave the whole run within 30 minutes on two cores
-    (2,000 took 30.5)."""
+    tangles), and 1,800 of a mesh part leave the whole run within 30 minutes on two cores,
+    where 2,000 did not (``docs/teach.md``)."""
     test_samples: int = 500
     bench_trials: int = 20
     epochs: int = 40
