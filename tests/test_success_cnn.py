@@ -249,8 +249,8 @@ def test_bench_warns_when_a_model_was_trained_on_the_piles_it_tests(tmp_path):
                           "its data with another --seed"]
 
 
-def test_the_ceiling_tool_scores_a_models_first_picks_on_pick_data(models, picks, tmp_path):
-    """``tools/pick_ceiling.py --model``: the success CNN, which tells the synthetic piles'
+def test_pick_ceiling_scores_a_models_first_picks_on_pick_data(models, picks, tmp_path):
+    """``tangle-drake pick-ceiling --model``: the success CNN, which tells the synthetic piles'
     picks apart, closes graspability's gap to the oracle (graspability's scores are noise
     there); a model the rule cannot serve is refused with the reason."""
     from tangle_drake.dataset import read_manifest, write_manifest
@@ -258,21 +258,19 @@ def test_the_ceiling_tool_scores_a_models_first_picks_on_pick_data(models, picks
     data = tmp_path / "picks"
     shutil.copytree(picks, data)
     write_manifest(data, {**read_manifest(data), "label": "pick"})
-    tool = TOOLS / "pick_ceiling.py"
+    command = [sys.executable, "-m", "tangle_drake.cli", "pick-ceiling", str(data), "--model"]
     figures = tmp_path / "ceiling.json"
-    done = subprocess.run([sys.executable, str(tool), str(data), "--model", str(models["success"]),
-                           "--json", str(figures)], capture_output=True, text=True, check=True)
+    done = subprocess.run([*command, str(models["success"]), "--json", str(figures)],
+                          capture_output=True, text=True, check=True)
     row = json.loads(figures.read_text())["synthetic_bars"]
     choice = row["models"][shown_path(models["success"])]  # as results record paths
     assert choice["rule"] == "success-cnn" and "| success-cnn |" in done.stdout
     assert row["graspability"] < choice["success"] == pytest.approx(row["oracle"])
     assert choice["closed"] == pytest.approx(1.0)
-    refused = subprocess.run([sys.executable, str(tool), str(data), "--model",
-                              str(models["tangled"]), "--rule", "success-cnn"],
+    refused = subprocess.run([*command, str(models["tangled"]), "--rule", "success-cnn"],
                              capture_output=True, text=True)
     assert refused.returncode == 2 and "needs a model of P(success)" in refused.stderr
-    refused = subprocess.run([sys.executable, str(tool), str(data), "--model",
-                              str(models["success"]), "--rule", "random"],
+    refused = subprocess.run([*command, str(models["success"]), "--rule", "random"],
                              capture_output=True, text=True)
     assert refused.returncode == 2 and "--rule 'random': choose a rule" in refused.stderr
 

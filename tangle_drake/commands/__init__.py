@@ -2,4 +2,4 @@
 
 COMMAND_MODULES: tuple[str, ...] = ("demo", "scene", "diagram", "graspability", "collect",
                                      "train", "evaluate", "export_onnx", "hardware_sim", "bench",
-                                     "teach")
+                                     "teach", "pick_ceiling")

@@ -1,36 +1,31 @@
-"""The top-k oracle of physical-pick data: how far re-ranking graspability's candidates can go.
-
-For each dataset of ``tangle-drake collect --label pick`` (one per part), prints the first-pick
-success of graspability alone, of the oracle that picks the best of each pile's candidates,
-their gap, and each rank's success rate (:mod:`tangle_drake.tangle_data.ceiling`). With
-``--model``, also what each model's rule would have picked first on the same piles, and how much
-of the gap it closes: a measure of the model's ranking that needs no benchmark run (on piles of
-another seed than its training data's, e.g. the test picks of ``make_trained_models.py``).
-
-    python tools/pick_ceiling.py data/picks_u_hook data/picks_c_ring ... [--json FILE]
-    python tools/pick_ceiling.py data/u_hook_pick_test --model success outcome
-    python tools/pick_ceiling.py data/part_pick_test --model part.outcome.pt --rule success-cnn
-"""
+"""``tangle-drake pick-ceiling``: the top-k oracle of physical-pick data, and how much of its
+gap a model's rule closes, scored on recorded picks with no benchmark run."""
 
 from __future__ import annotations
 
 import argparse
 import json
-import sys
 from dataclasses import asdict
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from tangle_drake.dataset import load_samples, read_manifest
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.paths import shown_path
-from tangle_drake.pick.selection import trained_model_path
-from tangle_drake.tangle_cnn.objectives import DEFAULT_RULES, OBJECTIVES, check_serves
-from tangle_drake.tangle_cnn.selection import EMAP_RULES, MODEL_RULES
-from tangle_drake.tangle_data.ceiling import RuleChoice, pick_ceiling, rule_choice
+from tangle_drake.tangle_cnn.objectives import OBJECTIVES
+
+if TYPE_CHECKING:
+    from tangle_drake.tangle_data.ceiling import RuleChoice
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "pick-ceiling", help="how far re-ranking graspability's candidates can go on pick data",
+        description="For each dataset of `tangle-drake collect --label pick` (one per part), "
+                    "print the first-pick success of graspability alone, of the oracle that "
+                    "picks the best of each pile's candidates, their gap, and each rank's "
+                    "success rate. With --model, also what each model's rule would have picked "
+                    "first on the same piles, paired against graspability, and how much of the "
+                    "gap it closes: a measure of a model's ranking that needs no benchmark run "
+                    "(use piles of another seed than its training data's).")
     parser.add_argument("data", nargs="+", type=Path, help="physical-pick dataset directories")
     parser.add_argument("--json", type=Path, help="also write the figures here")
     parser.add_argument("--model", nargs="+", default=[], metavar="MODEL",
@@ -39,7 +34,14 @@ def main() -> int:
                              "dataset's part's), whose rules' first picks to score")
     parser.add_argument("--rule", help="the rule the models pick with (default: each "
                                        "model's own, as bench's model:PATH)")
-    args = parser.parse_args()
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from tangle_drake.dataset import load_samples, read_manifest
+    from tangle_drake.paths import shown_path
+    from tangle_drake.tangle_data.ceiling import pick_ceiling
+
     rows = {}
     choices: list[tuple[str, str, RuleChoice]] = []
     print("| part | piles | graspability [95 % CI] | top-k oracle [95 % CI] | gap | by rank |")
@@ -57,9 +59,8 @@ def main() -> int:
             for model in args.model:
                 choices.append((part, model, _choice(samples, manifest, directory, part, model,
                                                      args.rule)))
-        except (TangleDrakeError, ValueError) as error:
-            print(f"error: {error}", file=sys.stderr)
-            return 2
+        except ValueError as error:  # a damaged dataset's arrays
+            raise TangleDrakeError(f"{directory}: {error}") from error
         rows[part] = asdict(ceiling) | {"models": {shown_path(model): asdict(choice)
                                                    for p, model, choice in choices if p == part}}
         ranks = ", ".join(f"{r}: {100 * s:.0f} %" for r, (s, _) in ceiling.by_rank.items())
@@ -90,9 +91,13 @@ def _choice(samples: dict, manifest: dict, directory: Path, part: str, model: st
             rule: str | None) -> RuleChoice:
     """``model``'s (a checkpoint, or a shipped objective's name) rule's first picks on the
     samples of ``directory``."""
+    from tangle_drake.pick.selection import trained_model_path
     from tangle_drake.tangle_cnn.evaluate import check_crop  # imports torch
     from tangle_drake.tangle_cnn.model import load_tangle_model
+    from tangle_drake.tangle_cnn.objectives import DEFAULT_RULES, check_serves
+    from tangle_drake.tangle_cnn.selection import EMAP_RULES, MODEL_RULES
     from tangle_drake.tangle_cnn.training_data import crop_spec
+    from tangle_drake.tangle_data.ceiling import rule_choice
 
     path = trained_model_path(part, model) if model in OBJECTIVES else Path(model)
     tangle_model = load_tangle_model(path)
@@ -105,6 +110,3 @@ def _choice(samples: dict, manifest: dict, directory: Path, part: str, model: st
                directory)
     return rule_choice(samples, rule, tangle_model.predict(samples["crop"], samples["depth_m"]))
 
-
-if __name__ == "__main__":
-    sys.exit(main())
