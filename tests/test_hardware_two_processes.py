@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from tangle_drake.cli import SAFETY_STOP_EXIT
+from tangle_drake.hardware.config import HardwareConfig
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.scenario import load_scenario
 
@@ -92,12 +93,19 @@ def test_a_silent_robot_gets_a_clear_error_naming_the_channels(tmp_path):
     assert result["command_times"] == []
 
 
-def test_a_bridge_that_stops_mid_pick_ends_the_controller_naming_the_stale_channel(tmp_path):
+def _killed_mid_pick(case: str, tmp_path: Path) -> tuple[dict, HardwareConfig]:
+    """Run ``case`` (one side killed once the controller has connected) on the light
+    scenario: what happened, and the scenario's hardware timeouts."""
     scenario = _scenario(tmp_path)
-    timeout = load_scenario(scenario).hardware.status_timeout
-    result = _run("bridge_stops", scenario, tmp_path)
+    result = _run(case, scenario, tmp_path)
     _no_traceback(result)
     assert result["connected"], result["controller_log"]
+    return result, load_scenario(scenario).hardware
+
+
+def test_a_bridge_that_stops_mid_pick_ends_the_controller_naming_the_stale_channel(tmp_path):
+    result, hardware = _killed_mid_pick("bridge_stops", tmp_path)
+    timeout = hardware.status_timeout
     log = result["controller_log"]
     assert result["controller_rc"] == SAFETY_STOP_EXIT, log
     # Every channel of the stopped bridge goes stale; the first past its timeout is named.
@@ -111,11 +119,8 @@ def test_a_bridge_that_stops_mid_pick_ends_the_controller_naming_the_stale_chann
 
 
 def test_a_controller_killed_mid_pick_leaves_the_robot_holding_its_pose(tmp_path):
-    scenario = _scenario(tmp_path)
-    timeout = load_scenario(scenario).hardware.command_timeout
-    result = _run("controller_killed", scenario, tmp_path)
-    _no_traceback(result)
-    assert result["connected"], result["controller_log"]
+    result, hardware = _killed_mid_pick("controller_killed", tmp_path)
+    timeout = hardware.command_timeout
     assert "no command on GANTRY_COMMAND" in result["robot_log"]
     assert "holding the measured pose" in result["robot_log"]
     held = np.array([q for t, q in result["status"] if t > result["killed_at"] + timeout + 0.3])

@@ -308,11 +308,11 @@ def _height_map_pixel_size(image: ImageFile, path: Path, args: argparse.Namespac
             warnings.append(f"--camera {source} is {k.width}x{k.height}, the image "
                             f"{image.array.shape[1]}x{image.array.shape[0]}: not its camera, "
                             "so not checked against it")
-    if found is None or consistent is None:
+    if consistent is None:  # no camera, or none this image can be checked against
         if args.pixel_size is None:
             raise TangleDrakeError(_needs_scales(image, path, args))
         return args.pixel_size
-    source, k, (depth_m, size) = found[0], found[1].intrinsics, consistent
+    depth_m, size = consistent
     depth_reading = (f"the image is {source}'s size ({k.width}x{k.height}) and, read as that "
                      f"camera's depth in millimetres, shows the bin {depth_m:.3g} m away, "
                      f"where a pixel is {size:.4g} m")
