@@ -3,6 +3,7 @@ resumed run that redoes nothing finished, the command end to end, and bad input 
 
 import json
 import os
+import re
 import subprocess
 import sys
 from dataclasses import replace
@@ -33,7 +34,7 @@ from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, classify
 from tangle_drake.pick.selection import RuleSelector
 from tangle_drake.pile import PileSettler
 from tangle_drake.scenario import BinConfig, PartCount
-from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.station import build_station, part_bodies
 from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, save_atomic
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
@@ -238,6 +239,11 @@ def test_the_quick_benchmark_writes_its_report(quick_run, untrained_model):
     assert len([r for r in summary["paired"] if r["part"] == "all"]) == 3
     rows = (out / "results.csv").read_text().splitlines()
     assert len(rows) == 1 + 2 * 3  # a row per pick
+    # The code and the kind of machine that made it, in the summary and the report's header.
+    assert re.fullmatch(r"[0-9a-f]{7}(\+changes)?|not a git checkout", summary["commit"])
+    assert re.fullmatch(r"\d+ CPU cores, (\d+ GB, )?(no GPU|.+)", summary["machine"])
+    header = (out / "report.md").read_text().splitlines()[2]
+    assert f"commit {summary['commit']}, on {summary['machine']}" in header
     model_picks = [p for t in trials_in(out) for p in t["picks"] if p["method"].startswith(
         "model:")]
     assert all(p.get("p_model") is not None for p in model_picks
@@ -415,6 +421,8 @@ def test_clearing_a_quick_bin_counts_what_landed_in_the_tray(tmp_path, capsys):
     assert figures["delivered"] == run["delivered"] and figures["bins"] == 1
     assert figures["parts_per_hour"] > 0
     assert sum(figures["lost_by_mode"].values()) == run["lost"]
+    assert f"commit {summary['commit']}, on {summary['machine']}" in \
+        (out / "clear_report.md").read_text().splitlines()[2]
     assert "exactly one part" in (out / "clear_report.md").read_text()
     assert "graspability: delivered" in capsys.readouterr().out
     # The same command again resumes: nothing to run.
@@ -540,7 +548,7 @@ def test_a_run_that_finished_no_trial_binds_nothing(tmp_path):
 
 
 def test_clearing_with_a_sensor_too_coarse_for_the_part_says_so_before_it_starts():
-    scenario = Path(__file__).parents[1] / "docs/clearing/scenarios/floating_noise_x5.yaml"
+    scenario = Path(__file__).parents[1] / "docs/results/clearing/scenarios/floating_noise_x5.yaml"
     _, _, notices = plan(BenchOptions(clear=True, scenario=scenario, parts=["u_hook", "j_hook"],
                                       methods=["graspability"], trials=1))
     warnings = [n for n in notices if "weighs one part" in n]

@@ -24,7 +24,7 @@ README = ROOT / "README.md"
 DOCS = sorted((ROOT / "docs").rglob("*.md"))
 CARD = ROOT / "tangle_drake" / "trained" / "README.md"
 TOOLS = ROOT / "tools"
-PAGES = [README, *DOCS, CARD]
+PAGES = [README, *DOCS, CARD, TOOLS / "README.md"]
 """Every page a user reads: the README, docs/ (generated reports included) and the model card."""
 
 README_MAX_LINES = 300
@@ -185,7 +185,8 @@ def test_the_command_parser_reads_what_the_pages_write():
 
 # --- (c) scenarios ------------------------------------------------------------------------------
 
-SCENARIO_PATH = re.compile(r"(?<![\w/.-])((?:diagrams|docs/clearing/scenarios)/[\w./-]+?\.yaml)")
+SCENARIO_PATH = re.compile(
+    r"(?<![\w/.-])((?:diagrams|docs/results/clearing/scenarios)/[\w./-]+?\.yaml)")
 
 
 def documented_scenarios() -> list[str]:
@@ -310,7 +311,7 @@ def test_a_docs_page_marks_its_tables_by_name():
     assert changed == ["docs/some_page.md: headline"]
     assert made.startswith("Before.\n\n<!-- table: headline -->\n| first pick")
     assert made.endswith("<!-- /table -->\n\nAfter.\n") and "by hand" not in made
-    assert "[one layer](benchmark/report.md)" in made
+    assert "[one layer](results/benchmark/report.md)" in made
     with pytest.raises(TABLES.TableError, match=r"some_page.md:1: no table named 'nothing'"):
         TABLES.render(page, "<!-- table: nothing -->\n<!-- /table -->\n")
     with pytest.raises(TABLES.TableError, match="without its <!-- /table -->"):
@@ -322,8 +323,9 @@ def test_the_headline_links_its_four_results():
     linked = [re.search(r"\]\(([^)]+)\)", row).group(1)
               for table in tables(lines) for row in table[2:]]
     assert sorted(linked) == sorted([
-        "docs/benchmark/report.md", "docs/dense_comparison/report.md",
-        "docs/clearing/closed/clear_report.md", "docs/clearing/arm_brisk_6cm/clear_report.md"])
+        "docs/results/benchmark/report.md", "docs/results/dense_comparison/report.md",
+        "docs/results/clearing/closed/clear_report.md",
+        "docs/results/clearing/arm_brisk_6cm/clear_report.md"])
 
 
 def test_the_headline_names_the_benchmarks_methods():
@@ -334,9 +336,98 @@ def test_the_headline_names_the_benchmarks_methods():
     assert "bins cleared" not in "\n".join(lines).lower()
 
 
-# --- (f) no machine's paths ----------------------------------------------------------------------
+# --- (f) the result pages -----------------------------------------------------------------------
 
-MACHINE_PATH = re.compile(r"(?<![\w.~/-])/(?:work|root|home)/[^\s\"'`]*")
+RESULTS = ROOT / "docs" / "results"
+NOT_RESULTS = {"clearing/scenarios", "superseded"}
+"""Folders under docs/results that hold no result of their own: the clearings' frozen
+scenario files (their digests are recorded by the results), the superseded ones' parent."""
+RESULT_FIELDS = ("Remake", "Commit", "Machine", "Data")
+FIELD = re.compile(r"^- \*\*(\w+):\*\* (.+)$")
+SCRIPT = re.compile(r"(?<![\w/.-])python3? ((?:tools|examples)/[\w/-]+\.py)((?: [^`\n]*)?)")
+
+
+def result_folders() -> list[str]:
+    """Every folder under docs/results holding a result's files (anything but pages)."""
+    folders = {path.parent for path in RESULTS.rglob("*") if path.is_file()
+               and path.suffix != ".md"}
+    return sorted(str(folder.relative_to(RESULTS)) for folder in folders
+                  if str(folder.relative_to(RESULTS)) not in NOT_RESULTS)
+
+
+def page_fields(page: Path) -> dict[str, str]:
+    """The ``- **Field:** value`` lines that open a result page (before its first paragraph
+    of prose after them)."""
+    fields: dict[str, str] = {}
+    for line in page.read_text().splitlines()[:12]:
+        if match := FIELD.match(line):
+            fields[match.group(1)] = match.group(2)
+    return fields
+
+
+def test_there_are_result_folders():
+    assert {"benchmark", "dense_comparison", "clearing/closed"} <= set(result_folders())
+
+
+@pytest.mark.parametrize("folder", result_folders())
+def test_every_result_has_a_page_beside_its_data(folder):
+    page = RESULTS / folder / "README.md"
+    assert page.is_file(), f"docs/results/{folder} has data but no README.md page"
+    fields = page_fields(page)
+    missing = [name for name in RESULT_FIELDS if name not in fields]
+    assert not missing, f"docs/results/{folder}/README.md does not open with {missing}"
+    assert re.match(r"`[0-9a-f]{7,40}`", fields["Commit"]), fields["Commit"]
+    remake = re.fullmatch(r"`([^`]+)`.*", fields["Remake"])
+    assert remake, f"docs/results/{folder}: the remake command is not in backticks"
+    command = remake.group(1)
+    if "tangle-drake" in command:
+        test_every_documented_subcommand_and_option_exists(f"docs/results/{folder}", command)
+    else:
+        assert SCRIPT.match(command), f"docs/results/{folder}: `{command}` runs nothing known"
+    named = [path for path in re.findall(r"docs/results/[\w./-]+", command)
+             if not path.startswith("docs/results/clearing/scenarios/")]  # inputs
+    assert all(path.startswith(f"docs/results/{folder}") for path in named), \
+        f"docs/results/{folder}: `{command}` writes elsewhere"
+    linked = relative_links(page)
+    assert any(not target.endswith(".md") for target in linked), \
+        f"docs/results/{folder}/README.md links none of its data files"
+
+
+def test_the_results_index_links_every_result_page():
+    index = RESULTS / "README.md"
+    linked = {(index.parent / target).resolve() for target in relative_links(index)}
+    missing = [folder for folder in result_folders()
+               if (RESULTS / folder / "README.md").resolve() not in linked]
+    assert not missing, f"docs/results/README.md does not link {missing}"
+
+
+def test_every_tool_is_listed_once_in_the_tools_readme():
+    listed = re.findall(r"^\| `(\w+\.py)` \|", (TOOLS / "README.md").read_text(), re.M)
+    assert sorted(listed) == sorted(path.name for path in TOOLS.glob("*.py"))
+
+
+def named_scripts() -> list[tuple[str, str, str]]:
+    """(page, script, its arguments) for every ``python tools/...`` or ``python
+    examples/...`` a page names."""
+    return sorted({(relative(page), match.group(1), match.group(2).strip())
+                   for page in PAGES
+                   for match in SCRIPT.finditer(re.sub(r"\\\n\s*", " ", page.read_text()))})
+
+
+@pytest.mark.parametrize(("page", "script", "arguments"), named_scripts(),
+                         ids=[f"{page}: {script}" for page, script, _ in named_scripts()])
+def test_every_named_script_exists_with_its_options(page, script, arguments):
+    path = ROOT / script
+    assert path.is_file(), f"{page}: names {script}, which is not in the repository"
+    source = path.read_text()
+    unknown = [option for option in OPTION.findall(arguments)
+               if f'"{option}"' not in source and f"'{option}'" not in source]
+    assert not unknown, f"{page}: {script} has no option {unknown}"
+
+
+# --- (g) no machine's paths ----------------------------------------------------------------------
+
+MACHINE_PATH = re.compile(r"(?<![\w.~/-])/(?:work|root|home|tmp)/[^\s\"'`]*")
 """An absolute path under a machine's own directories (URLs' paths follow a host, not this)."""
 
 
@@ -361,7 +452,7 @@ def test_no_file_names_a_path_of_the_machine_that_made_it():
     assert not found, "absolute paths of a machine:\n" + "\n".join(found[:20])
 
 
-# --- runnable snippets --------------------------------------------------------------------------
+# --- (h) runnable snippets ----------------------------------------------------------------------
 
 def runnable_snippets() -> list[tuple[str, str]]:
     """The ```python blocks a ``<!-- runnable -->`` comment marks (the comment alone on the

@@ -11,7 +11,6 @@ from pydrake.math import RigidTransform
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 
-from tangle_drake.drivers.config import ForceTorqueSensor
 from tangle_drake.drivers.force_torque import sample_draws
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.hardware.loop import run_with_hardware_sim
@@ -23,7 +22,8 @@ from tangle_drake.pick.payload import (
     PayloadSettings,
 )
 from tangle_drake.scenario import PartCount
-from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.scenario.drivers import ForceTorqueSensor
+from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.station import build_station
 
 G = 9.81

@@ -15,7 +15,7 @@ from drake import (
 )
 from pydrake.common.value import AbstractValue
 
-from tangle_drake.hardware.messages import (
+from tangle_drake.lcm_io.messages import (
     Received,
     ValidatingSerializer,
     check_iiwa_command,

@@ -8,10 +8,10 @@ import pytest
 from pydrake.systems.analysis import Simulator
 
 from tangle_drake.drivers.limits import RobotLimits
-from tangle_drake.hardware.config import HardwareConfig
-from tangle_drake.hardware.messages import Received
-from tangle_drake.hardware.safety import Mode, SafetySupervisor
+from tangle_drake.lcm_io.messages import Received
 from tangle_drake.robot import NEXTAGE_JOINTS
+from tangle_drake.scenario.hardware import HardwareConfig
+from tangle_drake.station.safety import Mode, SafetySupervisor
 
 LIMITS = RobotLimits(joint_names=NEXTAGE_JOINTS, units=("rad",) * 15,
                      position_lower=np.full(15, -2.0), position_upper=np.full(15, 2.0),

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from tangle_drake.cli import SAFETY_STOP_EXIT
-from tangle_drake.hardware.config import HardwareConfig
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.scenario import load_scenario
+from tangle_drake.scenario.hardware import HardwareConfig
 
 HARNESS = Path(__file__).with_name("two_processes.py")
 URL = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"

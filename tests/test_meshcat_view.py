@@ -25,7 +25,7 @@ from tangle_drake.pick.meshcat_view import (
 )
 from tangle_drake.pick.outcome import PickRecord, PickView
 from tangle_drake.pile import settle_pile
-from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.station import build_station
 from tangle_drake.tangle_cnn.selection import ScoredCandidate
 

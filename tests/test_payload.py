@@ -135,10 +135,10 @@ def test_settings_refuse_nonsense():
 def test_a_sensor_too_coarse_for_the_part_is_warned_about_before_any_work():
     from dataclasses import replace
 
-    from tangle_drake.drivers.config import ForceTorqueSensor
     from tangle_drake.pick.diagram import weighing_warning
     from tangle_drake.scenario import PartCount
-    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.scenario.drivers import ForceTorqueSensor
+    from tangle_drake.scenario.files import resolve_scenario
 
     scenario = resolve_scenario("floating_gripper.yaml")
     assert weighing_warning(scenario) is None  # the shipped sensor weighs a U-hook surely

@@ -245,7 +245,7 @@ def test_the_grasp_error_moves_the_executed_pose_not_what_the_method_saw():
 
 
 def test_the_contact_scaler_scales_friction_everywhere_and_the_pads_stiffness():
-    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.scenario.files import resolve_scenario
     from tangle_drake.station import build_station
 
     station = build_station(resolve_scenario("floating_gripper.yaml"))

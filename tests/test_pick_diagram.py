@@ -4,7 +4,7 @@ from tangle_drake.graspability import GraspabilityParams
 from tangle_drake.pick.diagram import build_pick_diagram, default_graspability_params
 from tangle_drake.pick.selection import TangleChoice
 from tangle_drake.planning.arm_motion import ArmMotion
-from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.station import build_station
 
 

@@ -7,7 +7,7 @@ from dataclasses import replace
 
 from tangle_drake.pick.demo import DemoOptions, run_demo
 from tangle_drake.pick.outcome import Outcome
-from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.scenario.files import resolve_scenario
 
 
 def test_one_pick_end_to_end(tmp_path):

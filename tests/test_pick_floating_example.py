@@ -1,4 +1,4 @@
-"""``tools/example_floating_gripper.py``: the planner with another ``Motion``, in another
+"""``examples/floating_gripper.py``: the planner with another ``Motion``, in another
 diagram, with the tangle CNN wired in (an untrained one: the wiring is what is tested)."""
 
 import importlib.util
@@ -12,11 +12,11 @@ from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, save_atomic
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
 
-EXAMPLE = Path(__file__).resolve().parent.parent / "tools" / "example_floating_gripper.py"
+EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "floating_gripper.py"
 
 
 def load_example():
-    spec = importlib.util.spec_from_file_location("example_floating_gripper", EXAMPLE)
+    spec = importlib.util.spec_from_file_location("floating_gripper", EXAMPLE)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module

@@ -10,7 +10,7 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.pick.demo import DemoOptions, run_demo
 from tangle_drake.pick.outcome import Outcome
 from tangle_drake.pick.pick_log import OUTCOME_CODES
-from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.tangle_cnn.training_data import load_checked_samples
 
 FIELDS = ("label", "outcome", "weighed_parts", "sim_lifted", "sim_held", "crop", "depth_m",

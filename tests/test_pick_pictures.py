@@ -6,7 +6,7 @@ import numpy as np
 
 from tangle_drake.pick.demo import DemoOptions, run_demo
 from tangle_drake.pick.pictures import CHOSEN, TILE
-from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.station import camera_model
 
 

@@ -65,7 +65,7 @@ def test_a_pile_that_cannot_be_made_or_picked_is_refused_before_any_simulation()
     from tangle_drake.gripper import GripperSpec
     from tangle_drake.pile import check_pile
     from tangle_drake.scenario import PartCount
-    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.scenario.files import resolve_scenario
 
     scenario = resolve_scenario("pick_demo.yaml")
 

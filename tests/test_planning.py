@@ -22,7 +22,7 @@ from tangle_drake.planning.trajectory import (
     through_waypoints,
 )
 from tangle_drake.robot import HOME, LEFT_ARM
-from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.scenario.files import resolve_scenario
 
 BIN = resolve_scenario(None).bin  # the demo's
 RIM = BIN.floor_height + BIN.wall_height
@@ -119,7 +119,7 @@ def test_the_lift_rises_until_a_hanging_chain_clears_the_pile():
 def test_the_gantry_lifts_a_chain_clear_within_its_travel():
     from tangle_drake.drivers.limits import station_limits
     from tangle_drake.planning.gantry_motion import GantryMotion
-    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.scenario.files import resolve_scenario
 
     scenario = resolve_scenario("floating_gripper.yaml")
     motion = GantryMotion(scenario.bin, station_limits(scenario))
@@ -139,7 +139,7 @@ def test_the_gantry_lifts_a_chain_clear_within_its_travel():
 def test_the_gantry_backs_out_the_way_it_came():
     from tangle_drake.drivers.limits import station_limits
     from tangle_drake.planning.gantry_motion import GantryMotion
-    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.scenario.files import resolve_scenario
 
     scenario = resolve_scenario("floating_gripper.yaml")
     motion = GantryMotion(scenario.bin, station_limits(scenario))

@@ -147,7 +147,7 @@ def _sweep_by_the_far_wall(bin_config: BinConfig) -> list[np.ndarray]:
 def test_the_gantry_sweeps_along_the_floor_and_comes_home():
     from tangle_drake.drivers.limits import station_limits
     from tangle_drake.planning.gantry_motion import GantryMotion
-    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.scenario.files import resolve_scenario
 
     scenario = resolve_scenario("floating_gripper.yaml")
     motion = GantryMotion(scenario.bin, station_limits(scenario))
@@ -174,7 +174,7 @@ def test_the_gantry_sweeps_along_the_floor_and_comes_home():
 def test_the_arm_sweeps_clear_of_the_bin_within_its_limits():
     from tangle_drake.planning.arm_motion import ArmMotion
     from tangle_drake.robot import HOME
-    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.scenario.files import resolve_scenario
 
     bin_config = resolve_scenario(None).bin
     motion = ArmMotion(bin_config)
@@ -204,7 +204,7 @@ def test_a_stir_in_the_simulation_moves_parts_and_keeps_them_in_the_bin():
     from tangle_drake.pile import settle_pile
     from tangle_drake.planning.gantry_motion import GantryMotion
     from tangle_drake.scenario import PartCount
-    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.scenario.files import resolve_scenario
     from tangle_drake.station import build_station, camera_model
 
     scenario = resolve_scenario("floating_gripper.yaml")

@@ -64,6 +64,22 @@ def test_the_model_card_says_what_the_shipped_files_hold():
         assert tested[0] in card, part
 
 
+def test_the_model_card_is_what_card_only_writes_with_its_hand_written_sections(tmp_path):
+    """Every figure of the card comes from the files: rewriting it changes nothing, and the
+    sections written by hand are kept (a card without them is refused, not half-written)."""
+    tool = load_tool()
+    committed = (TRAINED_DIR / "README.md").read_text()
+    card = tmp_path / "README.md"
+    card.write_text(committed)
+    tool.write_card(list(BUILTIN_PARTS), card)
+    assert card.read_text() == committed
+    assert "## The physical-pick data" in tool.hand_written(card)
+    card.write_text(committed.replace("<!-- /hand-written -->", ""))
+    with pytest.raises(tool.TangleDrakeError, match="hand-written"):
+        tool.write_card(list(BUILTIN_PARTS), card)
+    assert "<!-- /hand-written -->" not in card.read_text()
+
+
 @pytest.mark.parametrize("objective", ["success", "outcome"])
 @pytest.mark.parametrize("part", BUILTIN_PARTS)
 def test_a_shipped_physical_pick_model_picks_with_its_rule_and_the_card_describes_it(part,

@@ -17,7 +17,7 @@ import numpy as np
 from tangle_drake.bin_model import inner_corners
 from tangle_drake.entanglement.emap import entanglement_map
 from tangle_drake.graspability.roi import bin_roi
-from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.station import camera_model
 
 

@@ -24,7 +24,7 @@ from tangle_drake.planning.arm_motion import ArmMotion
 from tangle_drake.planning.motion import PlanningError
 from tangle_drake.robot import HOME
 from tangle_drake.scenario import BinConfig
-from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.scenario.files import resolve_scenario
 
 _PALM_MARGIN = 0.03
 """Grasp centres stay this far from the walls, m (the palm's half-width, about)."""

@@ -23,11 +23,11 @@ from pathlib import Path
 
 from tangle_drake.bench.methods import Method, MethodRun
 from tangle_drake.bench.physical_pick import PickRig
-from tangle_drake.bench.stats import wilson
 from tangle_drake.bench.trials import scenario_mode
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.paths import diagrams_dir
+from tangle_drake.stats import wilson
 from tangle_drake.tangle_data.physical import PICK_SCENARIO, PickDataSettings, pick_data_scenario
 from tangle_drake.tangle_data.seeds import pile_seed
 

@@ -44,6 +44,7 @@ import argparse
 import hashlib
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -52,6 +53,7 @@ from pathlib import Path
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts.catalog import BUILTIN_PARTS
+from tangle_drake.paths import shown_path
 from tangle_drake.pick.selection import TRAINED_DIR, trained_model_path
 from tangle_drake.tangle_cnn.card import (
     TEST_HEADER,
@@ -191,20 +193,36 @@ def test_rows(kind: ModelKind, part: str) -> tuple[str, dict[str, str]] | None:
     return None if evaluation is None else test_row(part, evaluation)
 
 
-def write_card(parts: list[str]) -> None:
+HAND_WRITTEN = re.compile(r"^<!-- hand-written:.*?^<!-- /hand-written -->\n", re.S | re.M)
+"""The card's sections written by hand (the data, the history, how the recipe was chosen),
+kept as they are when the rest is rewritten from the files."""
+
+
+def hand_written(card: Path) -> str:
+    """The hand-written sections of ``card``, marks included."""
+    found = HAND_WRITTEN.search(card.read_text()) if card.is_file() else None
+    if found is None:
+        raise TangleDrakeError(f"{card}: no <!-- hand-written: ... --> ... "
+                               "<!-- /hand-written --> sections to keep")
+    return found.group(0)
+
+
+def write_card(parts: list[str], card: Path = CARD) -> None:
     """The model card: what each shipped model was trained on, how well it validates and
-    tests, and the commands that reproduce it."""
+    tests, and the commands that reproduce it; its hand-written sections kept."""
+    kept = hand_written(card)
     tangled = KINDS["tangled"]
     shipped = [part for part in parts if tangled.model(part).is_file()]
     if not shipped:
         raise TangleDrakeError(f"no trained models in {TRAINED_DIR} to describe")
     rows = [validation_row(tangled.model(part)) for part in shipped]
     tested_rows = {part: found for part in shipped if (found := test_rows(tangled, part))}
-    CARD.write_text(CARD_TEMPLATE.format(header=VALIDATION_HEADER, rows="\n".join(rows),
+    card.write_text(CARD_TEMPLATE.format(header=VALIDATION_HEADER, rows="\n".join(rows),
                                          test=test_section(tested_rows),
                                          success=pick_model_section("success", parts),
-                                         outcome=pick_model_section("outcome", parts)))
-    print(f"wrote {CARD}")
+                                         outcome=pick_model_section("outcome", parts),
+                                         hand_written=kept))
+    print(f"wrote {shown_path(card)}")
 
 
 def card_test_row(kind: ModelKind, part: str, evaluation: dict) -> str:
@@ -370,6 +388,7 @@ the validation accuracy):
 
 {outcome}
 
+{hand_written}
 ## How they were made
 
 The one way a user makes a model for their own part:

@@ -38,17 +38,17 @@ README = ROOT / "README.md"
 GENERATED_REPORTS = ("report.md", "clear_report.md")
 """Pages the commands write whole; the tool reads no markers there."""
 
-SCENARIO_FOLDERS = ("diagrams", "docs/clearing/scenarios")
+SCENARIO_FOLDERS = ("diagrams", "docs/results/clearing/scenarios")
 """Where the scenarios a committed result ran on live (found by the result's sha256)."""
 BENCHMARK_KINDS = {"floating_gripper.yaml": "one layer", "dense_bin.yaml": "dense bin"}
 """What the headline calls a pick benchmark, by the scenario it ran on."""
 
 HEADLINE_METHODS = ("random", "graspability", "cnn", "harmonic", "success-cnn", "outcome")
 """The pick methods the headline compares, in its columns' order."""
-HEADLINE_PICKS = ("docs/benchmark", "docs/dense_comparison")
+HEADLINE_PICKS = ("docs/results/benchmark", "docs/results/dense_comparison")
 """The pick benchmarks of the headline (folders holding ``summary.json`` and ``report.md``)."""
 HEADLINE_CLEARING_METHOD = "harmonic"
-HEADLINE_CLEARINGS = ("docs/clearing/closed", "docs/clearing/arm_brisk_6cm")
+HEADLINE_CLEARINGS = ("docs/results/clearing/closed", "docs/results/clearing/arm_brisk_6cm")
 """The clearings of the headline (folders holding ``clear_summary.json`` and
 ``clear_report.md``)."""
 

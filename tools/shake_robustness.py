@@ -38,7 +38,6 @@ from pydrake.systems.framework import Context
 
 from tangle_drake.bench.clearing import clearing_diagram, tray_count
 from tangle_drake.bench.methods import Method, MethodRun
-from tangle_drake.bench.stats import wilson
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.pick.episode import PickEpisode, RunEnd
@@ -47,6 +46,7 @@ from tangle_drake.pick.planner import Mode
 from tangle_drake.pile import PileSettler
 from tangle_drake.scenario import PartCount, Scenario, load_scenario
 from tangle_drake.station import build_station
+from tangle_drake.stats import wilson
 from tangle_drake.tangle_data.perturb import ContactScaler
 from tangle_drake.tangle_data.seeds import pile_seed
 

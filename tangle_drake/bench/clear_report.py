@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from tangle_drake.provenance import describe
+
 BOOTSTRAP_SAMPLES = 2000
 BOOTSTRAP_SEED = 0
 _FIELDS = ("part", "trial", "method", "index", "outcome", "failure", "lifted", "held",
@@ -171,7 +173,7 @@ def write_clear_report(directory: Path, trials: Sequence[dict], summary: dict,
     """``clear_report.md``, ``clear_summary.json`` and ``clear_grasps.csv`` in ``directory``."""
     loop = "open loop (the paper's)" if summary.get("open_loop") else "closed loop"
     lines = [f"# Bin clearing ({summary['mode']} mode, {loop})", "",
-             f"Made by `{summary['command']}` ({summary['made_by']}, {summary['date']}).", "",
+             f"Made by `{summary['command']}` ({describe(summary)}, {summary['date']}).", "",
              "Deliveries and their part counts are the simulation's (what landed in the tray);"
              " parts per hour count simulated time plus the computation's wall time. Several "
              "read as one: delivered on the estimator's \"one\" while several were held up "

@@ -34,9 +34,8 @@ from pydrake.systems.framework import Context
 from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.parts import load_part
-from tangle_drake.pick.demo import SIM_TIME_PER_PICK
 from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
-from tangle_drake.pick.episode import PickEpisode, RunEnd
+from tangle_drake.pick.episode import SIM_TIME_PER_PICK, PickEpisode, RunEnd
 from tangle_drake.pick.outcome import Outcome, PickRecord, classify_lift
 from tangle_drake.pick.planner import Mode
 from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice

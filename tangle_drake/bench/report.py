@@ -19,8 +19,9 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from tangle_drake.bench.stats import paired_difference, wilson
 from tangle_drake.bench.trials import FAILURES, RESULTS
+from tangle_drake.provenance import describe
+from tangle_drake.stats import paired_difference, wilson
 
 ALL = "all"
 """The part name of the rows over every part."""
@@ -206,7 +207,7 @@ def _this_run(summary: dict) -> str:
 def markdown(summary: dict) -> str:
     """``report.md``."""
     out = [f"# Bin-picking benchmark ({summary['mode']} mode)", "",
-           f"Made by `{summary['command']}` ({summary['made_by']}), {summary['date']}: "
+           f"Made by `{summary['command']}` ({describe(summary)}), {summary['date']}: "
            f"{_this_run(summary)}.", "",
            "Success = exactly one part lifted. Rates in %, with the Wilson 95 % confidence "
            "interval; every method picks from the same piles (paired).", ""]

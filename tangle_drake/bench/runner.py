@@ -17,7 +17,6 @@ from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from tangle_drake import __version__
 from tangle_drake.bench.clear_report import summarize_clearing, write_clear_report
 from tangle_drake.bench.clearing import ClearWorker
 from tangle_drake.bench.gallery import save_tiles, write_index
@@ -46,8 +45,9 @@ from tangle_drake.pick.diagram import (
 from tangle_drake.pick.selection import model_part_notice
 from tangle_drake.pile import check_pile
 from tangle_drake.progress import Progress
+from tangle_drake.provenance import made_by
 from tangle_drake.scenario import parse_scenario
-from tangle_drake.scenario_files import scenario_path
+from tangle_drake.scenario.files import scenario_path
 from tangle_drake.tangle_data.perturb import PhysicsSpread
 from tangle_drake.workers import start_workers
 
@@ -260,8 +260,8 @@ def run_bench(options: BenchOptions, say: Callable[[str], None] = print) -> Benc
         notices.append(f"{total - len(done)} of {total} trials not run yet: run the same "
                        "command again to finish")
     methods = list(dict.fromkeys(m.name for ms in config.methods.values() for m in ms))
-    meta = {"command": options.command, "mode": config.mode, "made_by": f"tangle_drake "
-            f"{__version__}", "date": datetime.date.today().isoformat(), "workers": workers,
+    meta = {"command": options.command, "mode": config.mode, **made_by(),
+            "date": datetime.date.today().isoformat(), "workers": workers,
             "elapsed_s": time.perf_counter() - start, "trials_per_part": trials,
             "new_trials": new, "earlier_trials": len(done) - new,
             "config": run_identity, "notes": notices}

@@ -21,12 +21,12 @@ import numpy as np
 from tangle_drake.bench.gallery import TILE_KEY, caption, failure_kind, timed_tile
 from tangle_drake.bench.methods import Method, MethodRun
 from tangle_drake.bench.physical_pick import PickRig
-from tangle_drake.drivers.config import GantryDriver
 from tangle_drake.drivers.registry import carrier
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.pick.outcome import Outcome, PickRecord
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
+from tangle_drake.scenario.drivers import GantryDriver
 from tangle_drake.tangle_data.perturb import PhysicsSpread, PickPhysics
 
 MODE_SCENARIOS = {"floating": "floating_gripper.yaml", "arm": "pick_demo.yaml"}

@@ -25,7 +25,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from tangle_drake.graphviz import graphviz_installed, write_graphviz
-    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.scenario.files import resolve_scenario
     from tangle_drake.station import build_station
 
     if args.depth < 0:

@@ -37,7 +37,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.scenario.files import resolve_scenario
 
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     if not args.duration > 0:
@@ -47,8 +47,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _serve(scenario, args: argparse.Namespace) -> int:
-    from tangle_drake.hardware.buses import network_bus_url
     from tangle_drake.hardware.hardware_sim import build_hardware_sim
+    from tangle_drake.lcm_io.buses import network_bus_url
 
     url = network_bus_url(scenario, "use --check to drive the simulator from this process")
     sim = build_hardware_sim(scenario, seed=args.seed, progress=print)

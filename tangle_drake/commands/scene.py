@@ -29,7 +29,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from tangle_drake.paths import check_writable
     from tangle_drake.pile import check_pile
-    from tangle_drake.scenario_files import resolve_scenario
+    from tangle_drake.scenario.files import resolve_scenario
     from tangle_drake.scene import make_scene
 
     scenario = resolve_scenario(args.scenario)

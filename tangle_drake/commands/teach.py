@@ -32,8 +32,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "density)")
     parser.add_argument("--out", type=Path, required=True, help="the run's directory")
     parser.add_argument("--samples", type=int, default=None, metavar="N",
-                        help="labels to collect (default 1800: docs/learning_curve shows more, "
-                             "up to the paper's 5100, give no measurably better model)")
+                        help="labels to collect (default 1800: docs/results/learning_curve shows "
+                             "more, up to the paper's 5100, give no measurably better model)")
     parser.add_argument("--test-samples", type=int, default=None, metavar="N",
                         help="labels from piles of the next seed to test the model on "
                              "(default 500; the shipped models' card tests on 1000)")

@@ -27,17 +27,17 @@ from pydrake.systems.sensors import (
 )
 
 from tangle_drake.camera import CameraIntrinsics, CameraModel, top_view_pose
-from tangle_drake.drivers.config import camera_channel
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.hardware.images import (
+from tangle_drake.lcm_io.images import (
     DepthToMillimetres,
     ImageArrayToImages,
     ImageArrival,
     SimulatedImageTime,
 )
-from tangle_drake.hardware.lcm_systems import add_checked_subscriber, add_publisher
-from tangle_drake.hardware.messages import check_image_array
+from tangle_drake.lcm_io.lcm_systems import add_checked_subscriber, add_publisher
+from tangle_drake.lcm_io.messages import check_image_array
 from tangle_drake.scenario import Scenario
+from tangle_drake.scenario.drivers import camera_channel
 
 PORT_PREFIX = "camera"
 """The top camera's ports are ``camera.*`` whatever its name: perception reads them."""

@@ -31,10 +31,10 @@ from pydrake.systems.framework import (
 )
 from pydrake.systems.lcm import LcmPublisherSystem
 
-from tangle_drake.drivers.config import ForceTorqueSensor
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.hardware.lcm_systems import add_checked_subscriber
-from tangle_drake.hardware.messages import Received, check_force_torque
+from tangle_drake.lcm_io.lcm_systems import add_checked_subscriber
+from tangle_drake.lcm_io.messages import Received, check_force_torque
+from tangle_drake.scenario.drivers import ForceTorqueSensor
 
 WRENCH_SIZE = 6
 """``[fx, fy, fz, tx, ty, tz]``: N and N·m."""

@@ -32,19 +32,19 @@ from pydrake.systems.primitives import (
     StateInterpolatorWithDiscreteDerivative,
 )
 
-from tangle_drake.drivers.config import GantryDriver, JointPositionDriver, NextageDriver
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.hardware.config import HardwareConfig
-from tangle_drake.hardware.lcm_systems import (
+from tangle_drake.lcm_io.lcm_systems import (
     GatedPublisher,
     add_checked_subscriber,
     add_drake_message,
     add_publisher,
 )
-from tangle_drake.hardware.messages import check_iiwa_command, check_iiwa_status
-from tangle_drake.hardware.watchdog import CommandWatchdog
+from tangle_drake.lcm_io.messages import check_iiwa_command, check_iiwa_status
+from tangle_drake.lcm_io.watchdog import CommandWatchdog
 from tangle_drake.robot import HOME
 from tangle_drake.scenario import BinConfig, Scenario
+from tangle_drake.scenario.drivers import GantryDriver, JointPositionDriver, NextageDriver
+from tangle_drake.scenario.hardware import HardwareConfig
 
 GANTRY_PARK_OFFSET = 0.25
 """How far behind the bin's centre (along −x) the gantry parks, out of the camera's view, m."""

@@ -25,19 +25,19 @@ from pydrake.systems.framework import Context, Diagram, DiagramBuilder, OutputPo
 from pydrake.systems.lcm import LcmSubscriberSystem
 from pydrake.systems.primitives import MatrixGain, StateInterpolatorWithDiscreteDerivative
 
-from tangle_drake.drivers.config import ParallelJawDriver
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
-from tangle_drake.hardware.config import HardwareConfig
-from tangle_drake.hardware.lcm_systems import (
+from tangle_drake.lcm_io.lcm_systems import (
     GatedPublisher,
     add_checked_subscriber,
     add_drake_message,
     add_publisher,
 )
-from tangle_drake.hardware.messages import check_wsg_command, check_wsg_status
+from tangle_drake.lcm_io.messages import check_wsg_command, check_wsg_status
 from tangle_drake.robot import GRIPPER_JOINTS
 from tangle_drake.scenario import Scenario
+from tangle_drake.scenario.drivers import ParallelJawDriver
+from tangle_drake.scenario.hardware import HardwareConfig
 
 FINGERS_TO_WIDTH = np.array([[-1.0, 1.0, 0.0, 0.0], [0.0, 0.0, -1.0, 1.0]])
 """[q_left, q_right, v_left, v_right] -> [width, width rate]."""

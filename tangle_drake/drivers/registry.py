@@ -5,14 +5,14 @@ from __future__ import annotations
 from types import ModuleType
 
 from tangle_drake.drivers import joint_position, parallel_jaw
-from tangle_drake.drivers.config import (
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.scenario.drivers import (
     CARRIER_DRIVERS,
     DriverConfig,
     GantryDriver,
     NextageDriver,
     ParallelJawDriver,
 )
-from tangle_drake.errors import TangleDrakeError
 
 _MODULES: dict[type, ModuleType] = {NextageDriver: joint_position,
                                     GantryDriver: joint_position,

@@ -15,10 +15,10 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context, Diagram
 from pydrake.systems.lcm import LcmBuses
 
-from tangle_drake.hardware.buses import used_buses
-from tangle_drake.hardware.config import IN_PROCESS_URL
 from tangle_drake.hardware.hardware_sim import HardwareSim, build_hardware_sim
+from tangle_drake.lcm_io.buses import used_buses
 from tangle_drake.scenario import Scenario
+from tangle_drake.scenario.hardware import IN_PROCESS_URL
 from tangle_drake.station import build_hardware_station
 
 ControllerFactory = Callable[[Diagram], Diagram]

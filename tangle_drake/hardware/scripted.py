@@ -23,12 +23,12 @@ from pydrake.systems.framework import (
     State,
 )
 
-from tangle_drake.drivers.config import NextageDriver
 from tangle_drake.drivers.joint_position import home_positions
 from tangle_drake.drivers.registry import carrier
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.robot import HOME, INIT_RTM
 from tangle_drake.scenario import Scenario
+from tangle_drake.scenario.drivers import NextageDriver
 
 PEAK_SPEED = 0.5 * math.pi / 2
 """Fastest joint speed of the scripted move, rad/s: well under every joint's limit."""

@@ -20,9 +20,8 @@ from tangle_drake.crops import CropSpec
 from tangle_drake.errors import SafetyStop, TangleDrakeError
 from tangle_drake.graphviz import write_graphviz
 from tangle_drake.gripper import DEFAULT_GRIPPER
-from tangle_drake.hardware.buses import network_bus_url
-from tangle_drake.hardware.config import IN_PROCESS_URL
 from tangle_drake.hardware.loop import HardwareInTheLoop
+from tangle_drake.lcm_io.buses import network_bus_url
 from tangle_drake.parts import load_part
 from tangle_drake.pick.diagram import (
     PickDiagram,
@@ -31,7 +30,14 @@ from tangle_drake.pick.diagram import (
     pick_settings,
     weighing_warning,
 )
-from tangle_drake.pick.episode import Clock, PickEpisode, PickRun, RunEnd, run_picks
+from tangle_drake.pick.episode import (
+    SIM_TIME_PER_PICK,
+    Clock,
+    PickEpisode,
+    PickRun,
+    RunEnd,
+    run_picks,
+)
 from tangle_drake.pick.meshcat_view import CandidateMarkers, frame_the_work
 from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.pick_log import PickLog, pick_log_identity
@@ -42,7 +48,8 @@ from tangle_drake.pile import check_pile, settle_pile
 from tangle_drake.planning.motion import Motion
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario
-from tangle_drake.scenario_files import resolve_scenario
+from tangle_drake.scenario.files import resolve_scenario
+from tangle_drake.scenario.hardware import IN_PROCESS_URL
 from tangle_drake.station import SimulatedStation, build_station, camera_model
 from tangle_drake.tangle_cnn.model import load_tangle_model
 
@@ -53,10 +60,6 @@ which makes the replay file about that much smaller."""
 HARDWARE_POLL = 0.05
 """Seconds between looks at the planner against a robot in real time: a safety stop ends the
 demo this soon (in simulation, looks cost time and the episode's longer poll is kept)."""
-
-SIM_TIME_PER_PICK = 60.0
-"""Simulated seconds a pick may take before the demo gives up, s (several times what a pick
-takes; closed loop, a delivery may take several grasps, each with its weighing: twice this)."""
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,10 @@ from tangle_drake.pick.planner import Mode
 POLL = 0.5
 """Simulated seconds between looks at the planner, s (picks are reported as they end)."""
 
+SIM_TIME_PER_PICK = 60.0
+"""Simulated seconds a pick may take before a run gives up, s (several times what a pick
+takes; closed loop, a delivery may take several grasps, each with its weighing: twice this)."""
+
 
 class Clock(Protocol):
     """What :func:`run_picks` drives: a ``Simulator``, or a ``HardwareInTheLoop``."""

@@ -18,12 +18,12 @@ from pydrake.geometry import Box, Meshcat, Rgba
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import Context
 
-from tangle_drake.drivers.config import NextageDriver
 from tangle_drake.drivers.registry import carrier
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.pick.diagram import PickDiagram
 from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.scenario import BinConfig, Scenario
+from tangle_drake.scenario.drivers import NextageDriver
 
 FOV_Y_DEG = 75.0
 """Meshcat's default perspective camera's vertical field of view."""

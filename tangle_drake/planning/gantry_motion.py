@@ -3,7 +3,7 @@
 The gantry (``models/gantry``: x, y, z slides and a yaw turn, each a PD servo) carries the
 parallel-jaw gripper pointing straight down, so a grasp pose *is* a command: no IK, no arm to
 collide with, straight legs. Fast to plan and to simulate, which is what the benchmark's many
-trials need (``diagrams/floating_gripper.yaml``; ``tools/example_floating_gripper.py``).
+trials need (``diagrams/floating_gripper.yaml``; ``examples/floating_gripper.py``).
 """
 
 from __future__ import annotations

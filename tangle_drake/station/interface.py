@@ -3,8 +3,8 @@
 ``build_station(scenario, hardware=True)`` lands here. Each of the scenario's drivers adds its
 LCM branch (:mod:`tangle_drake.drivers`), with the same port names, types and sizes as its
 simulated branch (and no ``sim.*``), so the pick diagram does not change. Every incoming
-message is checked (:mod:`tangle_drake.hardware.messages`) and every outgoing command passes
-the :class:`~tangle_drake.hardware.safety.SafetySupervisor`, which adds:
+message is checked (:mod:`tangle_drake.lcm_io.messages`) and every outgoing command passes
+the :class:`~tangle_drake.station.safety.SafetySupervisor`, which adds:
 
 ============================= ====== ===================================================
 port                          dir    meaning
@@ -12,7 +12,7 @@ port                          dir    meaning
 ``safety.reset``              in     (optional) rising edge re-arms after a fault
 ``safety.fault``              out    1 after a safety stop: the planner must stop its pick
 ``safety.ready``              out    1 while commands go through (fresh status, no fault)
-``safety.report``             out    :class:`~tangle_drake.hardware.safety.SafetyReport`
+``safety.report``             out    :class:`~tangle_drake.station.safety.SafetyReport`
 ============================= ====== ===================================================
 """
 
@@ -26,13 +26,13 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.lcm import LcmBuses, LcmSubscriberSystem
 
 from tangle_drake.drivers import camera, force_torque, joint_position, parallel_jaw
-from tangle_drake.drivers.config import camera_channel
 from tangle_drake.drivers.limits import station_limits
 from tangle_drake.drivers.registry import carrier, gripper
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.hardware.buses import BusFinder
-from tangle_drake.hardware.safety import SafetySupervisor
+from tangle_drake.lcm_io.buses import BusFinder
 from tangle_drake.scenario import Scenario
+from tangle_drake.scenario.drivers import camera_channel
+from tangle_drake.station.safety import SafetySupervisor
 
 
 class HardwareStation(Diagram):

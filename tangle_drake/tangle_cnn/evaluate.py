@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from tangle_drake.bench.stats import wilson
 from tangle_drake.crops import CropSpec
 from tangle_drake.dataset import stored_fields
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.stats import wilson
 from tangle_drake.tangle_cnn.metrics import balanced_accuracy, binary_metrics, class_metrics
 from tangle_drake.tangle_cnn.model import TangleModel
 from tangle_drake.tangle_cnn.objectives import TANGLED

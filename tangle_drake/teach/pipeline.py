@@ -66,7 +66,7 @@ class TeachSettings:
     mesh_scale: float = 1.0
     mass_kg: float | None = None
     samples: int = 1800
-    """Labels to collect: the learning curves (``docs/learning_curve``) are flat within the
+    """Labels to collect: the learning curves (``docs/results/learning_curve``) are flat within the
     training's own spread past 1,000 for the U-hook and past 1,800 for the E-shape (rarer
     tangles), and 1,800 of a mesh part leave the whole run within 30 minutes on two cores,
     where 2,000 did not (``docs/teach.md``)."""
@@ -204,7 +204,7 @@ class Teacher:
     # -- the stages ---------------------------------------------------------------------------
 
     def _check(self) -> PartCheck:
-        from tangle_drake.scenario_files import resolve_scenario
+        from tangle_drake.scenario.files import resolve_scenario
 
         s = self.settings
         scenario = resolve_scenario("floating_gripper.yaml")
