@@ -1,6 +1,7 @@
 """``tangle-drake bench``: outcomes classified from hand-made end states, paired piles, a
 resumed run that redoes nothing finished, the command end to end, and bad input refused."""
 
+import hashlib
 import json
 import os
 import re
@@ -34,7 +35,7 @@ from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, classify
 from tangle_drake.pick.selection import RuleSelector
 from tangle_drake.pile import PileSettler
 from tangle_drake.scenario import BinConfig, PartCount
-from tangle_drake.scenario.files import resolve_scenario
+from tangle_drake.scenario.files import resolve_scenario, scenario_source
 from tangle_drake.station import build_station, part_bodies
 from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, save_atomic
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
@@ -225,8 +226,11 @@ def test_the_bench_and_the_demo_select_alike_without_a_cnn():
 def test_the_quick_benchmark_writes_its_report(quick_run, untrained_model):
     _, out = quick_run
     for name in ("report.md", "results.csv", "summary.csv", "paired.csv", "summary.json",
-                 "success.png", "outcomes.png", "bench.json"):
+                 "success.png", "outcomes.png", "bench.json", "scenario.yaml"):
         assert (out / name).is_file(), name
+    scenario = (out / "scenario.yaml").read_bytes()  # the scenario it ran on, beside it
+    assert hashlib.sha256(scenario).hexdigest() == \
+        json.loads((out / "bench.json").read_text())["scenario_sha256"]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["command"] == (f"tangle-drake bench --methods random graspability "
                                   f"model:{shown_path(untrained_model)} --quick "
@@ -548,7 +552,8 @@ def test_a_run_that_finished_no_trial_binds_nothing(tmp_path):
 
 
 def test_clearing_with_a_sensor_too_coarse_for_the_part_says_so_before_it_starts():
-    scenario = Path(__file__).parents[1] / "docs/results/clearing/scenarios/floating_noise_x5.yaml"
+    overlay = Path(__file__).parents[1] / "docs/results/clearing/overlays/wrist_noise_x5.yaml"
+    scenario = scenario_source(["floating_gripper.yaml", overlay])
     _, _, notices = plan(BenchOptions(clear=True, scenario=scenario, parts=["u_hook", "j_hook"],
                                       methods=["graspability"], trials=1))
     warnings = [n for n in notices if "weighs one part" in n]

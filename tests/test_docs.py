@@ -186,7 +186,7 @@ def test_the_command_parser_reads_what_the_pages_write():
 # --- (c) scenarios ------------------------------------------------------------------------------
 
 SCENARIO_PATH = re.compile(
-    r"(?<![\w/.-])((?:diagrams|docs/results/clearing/scenarios)/[\w./-]+?\.yaml)")
+    r"(?<![\w/.-])(diagrams/[\w./-]+?\.yaml)")
 
 
 def documented_scenarios() -> list[str]:
@@ -339,9 +339,9 @@ def test_the_headline_names_the_benchmarks_methods():
 # --- (f) the result pages -----------------------------------------------------------------------
 
 RESULTS = ROOT / "docs" / "results"
-NOT_RESULTS = {"clearing/scenarios", "superseded"}
-"""Folders under docs/results that hold no result of their own: the clearings' frozen
-scenario files (their digests are recorded by the results), the superseded ones' parent."""
+NOT_RESULTS = {"clearing/overlays", "superseded"}
+"""Folders under docs/results that hold no result of their own: the clearings' scenario
+overlays, the superseded ones' parent."""
 RESULT_FIELDS = ("Remake", "Commit", "Machine", "Data")
 FIELD = re.compile(r"^- \*\*(\w+):\*\* (.+)$")
 SCRIPT = re.compile(r"(?<![\w/.-])python3? ((?:tools|examples)/[\w/-]+\.py)((?: [^`\n]*)?)")
@@ -385,7 +385,7 @@ def test_every_result_has_a_page_beside_its_data(folder):
     else:
         assert SCRIPT.match(command), f"docs/results/{folder}: `{command}` runs nothing known"
     named = [path for path in re.findall(r"docs/results/[\w./-]+", command)
-             if not path.startswith("docs/results/clearing/scenarios/")]  # inputs
+             if not path.startswith("docs/results/clearing/overlays/")]  # inputs
     assert all(path.startswith(f"docs/results/{folder}") for path in named), \
         f"docs/results/{folder}: `{command}` writes elsewhere"
     linked = relative_links(page)

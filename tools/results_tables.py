@@ -21,7 +21,6 @@ with its files.
 from __future__ import annotations
 
 import argparse
-import functools
 import hashlib
 import json
 import os
@@ -31,22 +30,22 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from tangle_drake.scenario import load_scenario
+from tangle_drake.scenario import Scenario, load_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
 GENERATED_REPORTS = ("report.md", "clear_report.md")
 """Pages the commands write whole; the tool reads no markers there."""
 
-SCENARIO_FOLDERS = ("diagrams", "docs/results/clearing/scenarios")
-"""Where the scenarios a committed result ran on live (found by the result's sha256)."""
-BENCHMARK_KINDS = {"floating_gripper.yaml": "one layer", "dense_bin.yaml": "dense bin"}
-"""What the headline calls a pick benchmark, by the scenario it ran on."""
+SCENARIO_FILE = "scenario.yaml"
+"""The scenario a result ran on, kept beside it (its digest is the run's ``scenario_sha256``)."""
 
 HEADLINE_METHODS = ("random", "graspability", "cnn", "harmonic", "success-cnn", "outcome")
 """The pick methods the headline compares, in its columns' order."""
-HEADLINE_PICKS = ("docs/results/benchmark", "docs/results/dense_comparison")
-"""The pick benchmarks of the headline (folders holding ``summary.json`` and ``report.md``)."""
+HEADLINE_PICKS = {"docs/results/benchmark": "one layer",
+                  "docs/results/dense_comparison": "dense bin"}
+"""The pick benchmarks of the headline (folders holding ``summary.json`` and ``report.md``),
+with what the headline calls each."""
 HEADLINE_CLEARING_METHOD = "harmonic"
 HEADLINE_CLEARINGS = ("docs/results/clearing/closed", "docs/results/clearing/arm_brisk_6cm")
 """The clearings of the headline (folders holding ``clear_summary.json`` and
@@ -72,44 +71,40 @@ def interval(low: float, high: float, scale: float = 100.0, digits: int = 1) -> 
     return f"[{scale * low:.{digits}f}, {scale * high:.{digits}f}]"
 
 
-@functools.cache
-def scenario_by_sha256(sha256: str) -> Path:
-    """The committed scenario file a result ran on, found by the digest it recorded."""
-    for folder in SCENARIO_FOLDERS:
-        for path in sorted((ROOT / folder).glob("*.yaml")):
-            if hashlib.sha256(path.read_bytes()).hexdigest() == sha256:
-                return path
-    raise TableError(f"no scenario in {SCENARIO_FOLDERS} has sha256 {sha256}")
+def result_scenario(folder: Path, summary: dict) -> Scenario:
+    """The scenario the result in ``folder`` ran on, checked against the digest it recorded."""
+    path = folder / SCENARIO_FILE
+    recorded = summary["config"]["scenario_sha256"]
+    if not path.is_file() or hashlib.sha256(path.read_bytes()).hexdigest() != recorded:
+        raise TableError(f"{folder.relative_to(ROOT)}: no {SCENARIO_FILE} with the sha256 its "
+                         f"summary recorded ({recorded})")
+    return load_scenario(path)
 
 
-def pile_size(summary: dict) -> int:
-    config = summary["config"]
-    if config.get("pile_size"):
-        return int(config["pile_size"])
-    scenario = load_scenario(scenario_by_sha256(config["scenario_sha256"]))
-    return sum(part.count for part in scenario.pile.parts)
+def pile_size(summary: dict, scenario: Scenario) -> int:
+    return int(summary["config"].get("pile_size") or scenario.pile.total_count)
 
 
 def row(cells: list[str]) -> str:
     return "| " + " | ".join(cells) + " |"
 
 
-def pick_row(link: str, summary: dict, methods: list[str] | tuple[str, ...]) -> str:
+def pick_row(link: str, kind: str, summary: dict, scenario: Scenario,
+             methods: list[str] | tuple[str, ...]) -> str:
     """The headline row of a pick benchmark (``summary.json``): first picks with exactly one
     part over every part, per method; ``–`` where the benchmark did not run the method."""
     overall = {rate["method"]: rate for rate in summary["rates"] if rate["part"] == "all"}
     piles = {rate["n"] for rate in overall.values()}
     if len(piles) != 1:
         raise TableError(f"{link}: methods ran on different piles")
-    kind = BENCHMARK_KINDS[scenario_by_sha256(summary["config"]["scenario_sha256"]).name]
-    label = (f"[{kind}]({link}): {piles.pop()} piles of {pile_size(summary)} parts, "
+    label = (f"[{kind}]({link}): {piles.pop()} piles of {pile_size(summary, scenario)} parts, "
              f"{summary['trials_per_part']} per part")
     cells = [f"{percent(overall[m]['rate'])} {interval(overall[m]['lower'], overall[m]['upper'])}"
              if m in overall else "–" for m in methods]
     return row([label, *cells])
 
 
-def clearing_row(link: str, summary: dict, method: str) -> str:
+def clearing_row(link: str, summary: dict, scenario: Scenario, method: str) -> str:
     """The headline row of a clearing (``clear_summary.json``): deliveries with exactly one
     part, parts delivered over the parts in the bins, parts lost, parts per hour."""
     if summary["open_loop"]:
@@ -117,9 +112,8 @@ def clearing_row(link: str, summary: dict, method: str) -> str:
     if method not in summary["overall"]:
         raise TableError(f"{link}: no method {method!r} in its summary")
     figures = summary["overall"][method]
-    scenario_path = scenario_by_sha256(summary["config"]["scenario_sha256"])
     if summary["mode"] == "arm":
-        nextage = load_scenario(scenario_path).model_drivers["nextage"]
+        nextage = scenario.model_drivers["nextage"]
         carrier = (f"Nextage arm, planned at {nextage.planning_velocity_limit:.1f} rad/s and "
                    f"{nextage.planning_acceleration_limit:.1f} rad/s² per joint, "
                    f"{100 * nextage.planning_slow_speed:g} cm/s next to the pile")
@@ -155,10 +149,11 @@ def headline(page: Path) -> list[str]:
     """The README's headline: the pick benchmarks per method, then the clearings."""
     lines = [row(["first pick with exactly one part", *[f"`{m}`" for m in HEADLINE_METHODS]]),
              row(["---"] * (1 + len(HEADLINE_METHODS))).replace(" ", "")]
-    for folder in HEADLINE_PICKS:
+    for folder, kind in HEADLINE_PICKS.items():
         summary = read_json(ROOT / folder / "summary.json")
         link = link_from(page, ROOT / folder / "report.md")
-        lines.append(pick_row(link, summary, HEADLINE_METHODS))
+        scenario = result_scenario(ROOT / folder, summary)
+        lines.append(pick_row(link, kind, summary, scenario, HEADLINE_METHODS))
     lines += ["",
               row([f"clearing whole bins, closed loop, `{HEADLINE_CLEARING_METHOD}` rule",
                    "deliveries with exactly one part", "parts delivered ÷ parts in the bins",
@@ -167,7 +162,8 @@ def headline(page: Path) -> list[str]:
     for folder in HEADLINE_CLEARINGS:
         summary = read_json(ROOT / folder / "clear_summary.json")
         link = link_from(page, ROOT / folder / "clear_report.md")
-        lines.append(clearing_row(link, summary, HEADLINE_CLEARING_METHOD))
+        scenario = result_scenario(ROOT / folder, summary)
+        lines.append(clearing_row(link, summary, scenario, HEADLINE_CLEARING_METHOD))
     return lines
 
 

@@ -1,11 +1,12 @@
 """The benchmark's results on disk: what the run is, and one line per finished trial.
 
-An output directory holds ``bench.json`` (the run's identity: parts, methods and their
-models by content, mode, seed, scenario, pile size; not the trial count, which a later run
-may raise) and ``results.jsonl``, one JSON line per finished trial appended with a single
-write and an fsync. A run killed at any moment leaves every finished trial on disk, at worst
-with a last line cut short, which the next run drops (and redoes that trial); running the
-same command again resumes, and a different run pointed at the same directory is refused.
+An output directory holds ``bench.json`` (the run's identity: parts, methods and their models
+by content, mode, seed, scenario, pile size; not the trial count, which a later run may raise),
+``scenario.yaml`` (the scenario itself) and ``results.jsonl``, one JSON line per finished trial
+appended with a single write and an fsync. A run killed at any moment leaves every finished
+trial on disk, at worst with a last line cut short, which the next run drops (and redoes that
+trial); running the same command again resumes, and a different run pointed at the same
+directory is refused.
 """
 
 from __future__ import annotations
@@ -17,6 +18,9 @@ from pathlib import Path
 from tangle_drake.errors import TangleDrakeError
 
 IDENTITY_FILE = "bench.json"
+SCENARIO_FILE = "scenario.yaml"
+"""The scenario the run picked in, as one text (its base and overlays merged): the result
+holds all it was made with, and its digest is the identity's ``scenario_sha256``."""
 RESULTS_FILE = "results.jsonl"
 
 
@@ -95,6 +99,11 @@ class ResultStore:
             self.notices.append(f"{self.path}: dropped {dropped} unreadable line(s) (a run "
                                 "stopped while writing); those trials run again")
             _write_atomic(self.path, "".join(line + "\n" for line in good))
+
+    def keep_scenario(self, text: str) -> None:
+        """Write :data:`SCENARIO_FILE` (the identity check made sure a resumed run's is the
+        same)."""
+        _write_atomic(self.directory / SCENARIO_FILE, text)
 
     def add(self, trial: dict) -> None:
         """Append one finished trial: one write, then fsync."""

@@ -46,8 +46,7 @@ from tangle_drake.pick.selection import model_part_notice
 from tangle_drake.pile import check_pile
 from tangle_drake.progress import Progress
 from tangle_drake.provenance import made_by
-from tangle_drake.scenario import parse_scenario
-from tangle_drake.scenario.files import scenario_path
+from tangle_drake.scenario.files import ScenarioSource, scenario_source
 from tangle_drake.tangle_data.perturb import PhysicsSpread
 from tangle_drake.workers import start_workers
 
@@ -78,7 +77,7 @@ class BenchOptions:
     mode: str | None = None
     """``floating`` or ``arm``; ``None``: the scenario's carrier (``floating`` without one)."""
     seed: int = 0
-    scenario: str | Path | None = None
+    scenario: ScenarioSource | str | Path | None = None
     quick: bool = False
     clear: bool = False
     """Clear whole bins (closed loop unless ``open_loop``) instead of one pick per method."""
@@ -118,21 +117,19 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
         raise TangleDrakeError(f"--workers must be at least 1, got {options.workers}")
     if options.mode is not None and options.mode not in MODES:
         raise TangleDrakeError(f"unknown --mode {options.mode!r}; choose {' or '.join(MODES)}")
-    path = scenario_path(options.scenario if options.scenario is not None
-                         else MODE_SCENARIOS[options.mode or "floating"])
-    try:
-        text = path.read_text()
-    except OSError as error:
-        raise TangleDrakeError(f"cannot read scenario file {path}: {error.strerror}") from error
-    scenario = parse_scenario(text, source=str(path))  # a clear error now, not in every worker
+    source = scenario_source(options.scenario).with_default(
+        MODE_SCENARIOS[options.mode or "floating"])
+    text = source.text()
+    scenario = source.load()  # a clear error now, not in every worker
+    path = source.name
     if scenario.pile.total_count == 0 and not options.quick:
         raise TangleDrakeError(f"{path}: the scenario's pile has no parts: there is nothing "
                                "to pick")
     notices = []
     parts = []
-    if options.parts is None and options.scenario is not None and not options.quick:
+    if options.parts is None and source.files and not options.quick:
         names = list(dict.fromkeys((e.part, e.mesh_scale) for e in scenario.pile.parts))
-        notices.append(f"notice: parts from the scenario {shown_path(path)}: "
+        notices.append(f"notice: parts from the scenario {path}: "
                        f"{', '.join(part for part, _ in names)} (pass --parts for others)")
         parts = [PartSpec(part, load_part(part, mesh_scale=scale).name, scale)
                  for part, scale in names]
@@ -168,7 +165,7 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
         per_part[spec.name] = tuple(m for m in methods if m not in missing)
         notices += [note for m in per_part[spec.name] if m.model is not None
                     and (note := model_part_notice(m.model, spec.name))]
-    mode = scenario_mode(scenario, str(path))
+    mode = scenario_mode(scenario, path)
     if options.mode is not None and options.mode != mode:
         raise TangleDrakeError(
             f"--mode {options.mode} disagrees with --scenario {path}, whose carrier makes it "
@@ -243,6 +240,7 @@ def run_bench(options: BenchOptions, say: Callable[[str], None] = print) -> Benc
         say(notice)
     run_identity = identity(config)
     store = ResultStore(Path(options.out), run_identity)
+    store.keep_scenario(config.scenario_text)
     for notice in store.notices:
         say(notice)
     # Trial by trial across the parts, so a run stopped early covers every part alike.

@@ -3,16 +3,33 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
 from tangle_drake.errors import TangleDrakeError, check_seed
+
+if TYPE_CHECKING:
+    from tangle_drake.scenario.files import ScenarioSource
 
 DEFAULT_SCENARIO = "diagrams/pick_demo.yaml"
 
 
 def add_scenario_argument(parser: argparse.ArgumentParser,
                           default: str = f"the shipped {DEFAULT_SCENARIO}") -> None:
-    """The ``--scenario`` option every station command shares."""
-    parser.add_argument("--scenario", default=None, help=f"scenario YAML (default: {default})")
+    """The scenario options every station command shares: a base file with overlay files
+    merged onto it in order, and overlay texts merged last (Drake's ``--scenario_text``)."""
+    parser.add_argument("--scenario", nargs="+", default=None, metavar="YAML",
+                        help=f"scenario file (default: {default}), then overlay files, each "
+                             "changing only the fields it names")
+    parser.add_argument("--scenario-text", action="append", default=[], metavar="YAML",
+                        help="an overlay as text, merged after the files (may be repeated), "
+                             "e.g. \"pile: {seed: 3}\"")
+
+
+def scenario_from(args: argparse.Namespace) -> ScenarioSource:
+    """The scenario the options name (no file: the command's default base)."""
+    from tangle_drake.scenario.files import scenario_source  # imports Drake
+
+    return scenario_source(args.scenario, args.scenario_text)
 
 
 def seed(text: str) -> int:

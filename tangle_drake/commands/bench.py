@@ -6,7 +6,7 @@ import argparse
 import shlex
 from pathlib import Path
 
-from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument
+from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument, scenario_from
 from tangle_drake.failures import FailureKind
 from tangle_drake.workers import add_worker_arguments
 
@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
     outcome = run_bench(BenchOptions(
         methods=args.methods, parts=args.parts, mesh_scale=args.mesh_scale, trials=args.trials,
         workers=args.workers, ray=args.ray, out=args.out, mode=args.mode, seed=args.seed,
-        scenario=args.scenario, quick=args.quick, clear=args.clear, open_loop=args.open_loop,
+        scenario=scenario_from(args), quick=args.quick, clear=args.clear, open_loop=args.open_loop,
         gallery=args.gallery, perturb=args.perturb, command=command_line(args)))
     if args.clear:
         from tangle_drake.bench.clear_report import terminal_clear_summary

@@ -15,7 +15,7 @@ import argparse
 from dataclasses import replace
 from pathlib import Path
 
-from tangle_drake.commands.arguments import add_seed_argument
+from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument, scenario_from
 from tangle_drake.workers import add_worker_arguments
 
 DEFAULT_SAMPLES = 5100
@@ -80,9 +80,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="--label pick: run every pick to the top of its lift, as the "
                              "benchmark does (default: a grasp that closed on nothing ends "
                              "there, with the same outcome)")
-    parser.add_argument("--scenario", default=None,
-                        help="data scenario YAML (default: the shipped tangle_data.yaml; "
-                             "with --label pick the benchmark's floating_gripper.yaml)")
+    add_scenario_argument(parser, "the shipped tangle_data.yaml; with --label pick the "
+                                  "benchmark's floating_gripper.yaml")
     parser.set_defaults(func=run)
 
 
@@ -106,7 +105,7 @@ def settings_from_args(args: argparse.Namespace):
     if args.rise_threshold is not None:
         settings = replace(settings, labels=replace(settings.labels,
                                                     rise_threshold_m=args.rise_threshold))
-    scenario_text = _scenario_text(args.scenario)
+    scenario_text = _scenario_text(args)
     if args.parts_per_pile is not None:
         settings = replace(settings, parts_per_pile=args.parts_per_pile)
     else:
@@ -117,19 +116,14 @@ def settings_from_args(args: argparse.Namespace):
     return settings, scenario_text
 
 
-def _scenario_text(path: str | None, default: str | None = None) -> str:
-    """The scenario file's text; ``None``: the shipped ``default`` (tangle_data.yaml)."""
-    from tangle_drake.errors import TangleDrakeError
-    from tangle_drake.paths import diagrams_dir
-    from tangle_drake.tangle_data.collect import default_scenario_text
+def _scenario_text(args: argparse.Namespace, default: str | None = None) -> str:
+    """The scenario's text: its files and overlays; no file: the shipped ``default``
+    (tangle_data.yaml)."""
+    from tangle_drake.tangle_data.collect import DATA_SCENARIO
 
-    if path is None:
-        return default_scenario_text() if default is None else \
-            (diagrams_dir() / default).read_text()
-    try:
-        return Path(path).read_text()
-    except OSError as error:
-        raise TangleDrakeError(f"cannot read scenario file {path}: {error.strerror}") from error
+    source = scenario_from(args).with_default(default or DATA_SCENARIO)
+    source.load()  # a wrong field is named now, with the overlay that names it
+    return source.text()
 
 
 def pick_settings_from_args(args: argparse.Namespace):
@@ -155,7 +149,7 @@ def pick_settings_from_args(args: argparse.Namespace):
     if args.crop_size is not None:
         settings = replace(settings, crop=replace(settings.crop, size_m=args.crop_size))
     settings.validate()
-    return settings, _scenario_text(args.scenario, PICK_SCENARIO)
+    return settings, _scenario_text(args, PICK_SCENARIO)
 
 
 def run(args: argparse.Namespace) -> int:

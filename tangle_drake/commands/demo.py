@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument
+from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument, scenario_from
 from tangle_drake.tangle_cnn.selection import RULES
 
 
@@ -68,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     from tangle_drake.pick.demo import DemoOptions, run_demo
 
     run_demo(DemoOptions(
-        picks=args.picks, part=args.part, scenario=args.scenario, seed=args.seed,
+        picks=args.picks, part=args.part, scenario=scenario_from(args), seed=args.seed,
         rule=args.rule, model=args.model, meshcat=args.meshcat, record=args.record,
         diagram=args.diagram, hardware=args.hardware,
         with_hardware_sim=args.with_hardware_sim, open_loop=args.open_loop,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from tangle_drake.commands.arguments import add_scenario_argument
+from tangle_drake.commands.arguments import add_scenario_argument, scenario_from
 from tangle_drake.errors import TangleDrakeError
 
 
@@ -25,7 +25,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from tangle_drake.graphviz import graphviz_installed, write_graphviz
-    from tangle_drake.scenario.files import resolve_scenario
     from tangle_drake.station import build_station
 
     if args.depth < 0:
@@ -36,7 +35,7 @@ def run(args: argparse.Namespace) -> int:
         if out.suffix == ".dot":
             print("Graphviz's `dot` is not installed, so the diagram is written as .dot text; "
                   "install it (apt-get install graphviz) for station.svg")
-    station = build_station(resolve_scenario(args.scenario))
+    station = build_station(scenario_from(args).load())
     write_graphviz(station.GetGraphvizString(max_depth=args.depth), out)
     print(f"wrote {out}")
     return 0

@@ -7,7 +7,7 @@ import logging
 import math
 import time
 
-from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument
+from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument, scenario_from
 from tangle_drake.errors import TangleDrakeError
 
 CHECK_TIMEOUT = 10.0
@@ -37,12 +37,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from tangle_drake.scenario.files import resolve_scenario
 
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     if not args.duration > 0:
         raise TangleDrakeError(f"--duration must be positive, got {args.duration:g}")
-    scenario = resolve_scenario(args.scenario)
+    scenario = scenario_from(args).load()
     return _check(scenario, args.seed) if args.check else _serve(scenario, args)
 
 

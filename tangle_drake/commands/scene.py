@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument
+from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument, scenario_from
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -29,10 +29,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from tangle_drake.paths import check_writable
     from tangle_drake.pile import check_pile
-    from tangle_drake.scenario.files import resolve_scenario
     from tangle_drake.scene import make_scene
 
-    scenario = resolve_scenario(args.scenario)
+    scenario = scenario_from(args).load()
     for warning in check_pile(scenario):
         print(warning)
     out: Path = args.out

@@ -48,7 +48,7 @@ from tangle_drake.pile import check_pile, settle_pile
 from tangle_drake.planning.motion import Motion
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario
-from tangle_drake.scenario.files import resolve_scenario
+from tangle_drake.scenario.files import ScenarioSource, scenario_source
 from tangle_drake.scenario.hardware import IN_PROCESS_URL
 from tangle_drake.station import SimulatedStation, build_station, camera_model
 from tangle_drake.tangle_cnn.model import load_tangle_model
@@ -68,8 +68,9 @@ class DemoOptions:
 
     picks: int = 5
     part: str | None = None
-    scenario: Scenario | str | Path | None = None
-    """A scenario, or its file (a shipped name such as ``pick_demo.yaml`` is found too)."""
+    scenario: Scenario | ScenarioSource | str | Path | None = None
+    """A scenario, its source (a base file and overlays), or its file (a shipped name such as
+    ``pick_demo.yaml`` is found too)."""
     seed: int | None = None
     rule: str | None = None
     model: str | Path | None = None
@@ -113,8 +114,8 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
         raise TangleDrakeError("--meshcat, --record and --diagram show the simulated station; "
                                "with --hardware there is none in the controller (run "
                                "`tangle-drake diagram` for the picture)")
-    scenario = options.scenario if isinstance(options.scenario, Scenario) else resolve_scenario(
-        options.scenario)
+    scenario = options.scenario if isinstance(options.scenario, Scenario) else \
+        scenario_source(options.scenario).load()
     scenario = with_part(scenario, options.part)
     if scenario.pile.total_count == 0:
         raise TangleDrakeError("the scenario's pile has no parts: there is nothing to pick")
@@ -176,7 +177,7 @@ def _run_demo(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
     if log is not None:
         log.pile_seed = pile.report.seed
     pick = build_pick_diagram(scenario, choice, motion, station=station,
-                              settings=settings, seed=options.seed or 0)
+                              settings=settings, seed=scenario.random_seed)
     if options.diagram is not None:
         write_graphviz(pick.diagram.GetGraphvizString(max_depth=1), Path(options.diagram))
         say(f"wrote {options.diagram}")
@@ -223,7 +224,7 @@ def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice
 
     def make(station: Diagram) -> Diagram:
         built.append(build_pick_diagram(scenario, choice, motion, station=station,
-                                        settings=settings, seed=options.seed or 0))
+                                        settings=settings, seed=scenario.random_seed))
         return built[0].diagram
 
     if options.with_hardware_sim:

@@ -8,7 +8,6 @@ float" alone does not tell a user which of fifty lines to fix.
 
 # No `from __future__ import annotations`: Drake's YAML loader needs real field types.
 
-import dataclasses
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,6 +34,7 @@ from tangle_drake.scenario.drivers import (
     camera_channel,
 )
 from tangle_drake.scenario.hardware import HardwareConfig, check_lcm_url, default_lcm_buses
+from tangle_drake.scenario.yaml_io import Tagged, TaggedLoader, find_bad_field, one_line
 
 
 def _default_plant_config() -> MultibodyPlantConfig:
@@ -140,6 +140,9 @@ class Scenario:
     """The output tray beside the bin that picked parts are released into (a box like the
     bin); ``None``: parts are released beside the bin, onto the floor."""
     pile: PileConfig = field(default_factory=PileConfig)
+    random_seed: int = 0
+    """Seeds the run's draws other than the pile's (``pile.seed``): the ``random`` rule's
+    choices. The same scenario gives the same run."""
     camera: CameraConfig = field(default_factory=_default_camera)
     camera_height: float | None = 0.5
     """If set, the camera looks straight down from this height above the bin's floor centre
@@ -167,6 +170,8 @@ class Scenario:
             _require(not _footprints_overlap(self.bin, self.tray), "tray",
                      "must stand beside the bin, not over it")
         self.pile.validate("pile")
+        _require(0 <= self.random_seed < SEED_LIMIT, "random_seed",
+                 "must be a non-negative 63-bit integer")
         _require(self.camera.depth, "camera.depth", "must be true: graspability needs depth")
         _require(self.camera_height is None or self.camera_height > self.bin.wall_height,
                  "camera_height", "must be above the bin's walls")
@@ -234,55 +239,6 @@ class Scenario:
                              f"model_drivers.{name}.{limit}", "must be positive and finite")
 
 
-class _Tagged(typing.NamedTuple):
-    """A YAML node with a type tag (e.g. ``!FovDegrees``), kept so it can be written back."""
-
-    tag: str
-    value: object
-
-
-class _TaggedLoader(yaml.SafeLoader):
-    """Safe loader that keeps Drake's variant tags instead of refusing them, and refuses a key
-    given twice in one mapping (YAML would keep the last one silently)."""
-
-    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
-        seen: set = set()
-        for key_node, _ in node.value:
-            key = self.construct_object(key_node, deep=True)
-            if key in seen:
-                raise yaml.constructor.ConstructorError(
-                    "while reading a mapping", node.start_mark,
-                    f"found the key {key!r} twice", key_node.start_mark)
-            seen.add(key)
-        return super().construct_mapping(node, deep=deep)
-
-
-class _TaggedDumper(yaml.SafeDumper):
-    """Safe dumper that writes :class:`_Tagged` nodes with their tags."""
-
-
-def _construct_tagged(loader: yaml.SafeLoader, suffix: str, node: yaml.Node) -> _Tagged:
-    if isinstance(node, yaml.MappingNode):
-        value: object = loader.construct_mapping(node, deep=True)
-    elif isinstance(node, yaml.SequenceNode):
-        value = loader.construct_sequence(node, deep=True)
-    else:
-        value = loader.construct_scalar(node)
-    return _Tagged("!" + suffix, value)
-
-
-def _represent_tagged(dumper: yaml.SafeDumper, data: _Tagged) -> yaml.Node:
-    if isinstance(data.value, dict):
-        return dumper.represent_mapping(data.tag, data.value)
-    if isinstance(data.value, list):
-        return dumper.represent_sequence(data.tag, data.value)
-    return dumper.represent_scalar(data.tag, str(data.value))
-
-
-_TaggedLoader.add_multi_constructor("!", _construct_tagged)
-_TaggedDumper.add_representer(_Tagged, _represent_tagged)
-
-
 def _footprints_overlap(a: BinConfig, b: BinConfig) -> bool:
     """Whether two boxes' outer footprints overlap (walls included)."""
     for axis in range(2):
@@ -311,9 +267,9 @@ def load_scenario(path: str | Path) -> Scenario:
 def parse_scenario(text: str, source: str = "<string>") -> Scenario:
     """Parse scenario YAML text (see :func:`load_scenario`)."""
     try:
-        raw = yaml.load(text, Loader=_TaggedLoader)
+        raw = yaml.load(text, Loader=TaggedLoader)
     except yaml.YAMLError as error:
-        raise TangleDrakeError(f"{source} is not valid YAML: {_one_line(error)}") from error
+        raise TangleDrakeError(f"{source} is not valid YAML: {one_line(error)}") from error
     if raw is None:
         raw = {}
     if not isinstance(raw, dict):
@@ -322,7 +278,7 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
     try:
         scenario = yaml_load_typed(schema=Scenario, data=text, defaults=Scenario())
     except (RuntimeError, ValueError, TypeError) as error:
-        where = _find_bad_field(Scenario, raw, "")
+        where = find_bad_field(Scenario, raw, "")
         raise TangleDrakeError(f"{source}: scenario field '{where}': {error}") from error
     try:
         scenario.validate()
@@ -331,67 +287,12 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
     return scenario
 
 
-def _one_line(error: yaml.YAMLError) -> str:
-    """A YAML error as one line: where and what (PyYAML's own text quotes the lines)."""
-    if isinstance(error, yaml.MarkedYAMLError) and error.problem_mark is not None:
-        return f"line {error.problem_mark.line + 1}: {error.problem}"
-    return str(error).replace("\n", " ")
-
-
 def _check_driver_tags(drivers: object, source: str) -> None:
     """Drake's loader takes an untagged driver as the first kind; make the user say which."""
     if not isinstance(drivers, dict):
         return
     for name, value in drivers.items():
-        if not isinstance(value, _Tagged):
+        if not isinstance(value, Tagged):
             kinds = ", ".join(f"!{kind.__name__}" for kind in typing.get_args(DriverConfig))
             raise TangleDrakeError(f"{source}: scenario field 'model_drivers.{name}' needs a "
                                    f"driver tag: one of {kinds}")
-
-
-def _find_bad_field(schema: type, raw: object, prefix: str) -> str:
-    """The dotted path of the first field of ``raw`` that does not load as ``schema`` says.
-
-    Drake's loader reports the problem but not always where; this retries field by field.
-    """
-    if not (dataclasses.is_dataclass(schema) and isinstance(raw, dict)):
-        return prefix or "<top level>"
-    hints = typing.get_type_hints(schema)
-    for key, value in raw.items():
-        path = f"{prefix}.{key}" if prefix else str(key)
-        if key not in hints:
-            return path
-        field_type = hints[key]
-        if dataclasses.is_dataclass(field_type) and isinstance(value, dict):
-            inner = _find_bad_field(field_type, value, path)
-            if inner != path:
-                return inner
-        probe = dataclasses.make_dataclass("Probe", [(str(key), field_type)])
-        try:
-            yaml_load_typed(schema=probe, data=yaml.dump({key: value}, Dumper=_TaggedDumper),
-                            defaults=probe(**{str(key): _default_of(schema, key)}))
-        except (RuntimeError, ValueError, TypeError):
-            if isinstance(value, list) and _list_item_type(field_type) is not None:
-                for i, item in enumerate(value):
-                    inner = _find_bad_field(_list_item_type(field_type), item, f"{path}[{i}]")
-                    if inner != f"{path}[{i}]":
-                        return inner
-            return path
-    return prefix or "<top level>"
-
-
-def _default_of(schema: type, name: str) -> object:
-    for f in dataclasses.fields(schema):
-        if f.name == name:
-            if f.default is not dataclasses.MISSING:
-                return f.default
-            if f.default_factory is not dataclasses.MISSING:
-                return f.default_factory()
-    return None
-
-
-def _list_item_type(field_type: object) -> type | None:
-    if typing.get_origin(field_type) is list:
-        (item,) = typing.get_args(field_type)
-        return item if dataclasses.is_dataclass(item) else None
-    return None

@@ -1,13 +1,26 @@
-"""Finding scenario files: a user's path, or the scenarios shipped with the package."""
+"""Finding and composing scenarios: a base file (a user's path, or one shipped with the
+package), overlay files merged onto it in order, then overlay texts, as Drake's
+``hardware_sim`` takes ``--scenario_text``. A variant of a run is then the few lines it
+changes, not a copy of the whole file."""
 
 from __future__ import annotations
 
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
+import yaml
+
+from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import diagrams_dir
-from tangle_drake.scenario import Scenario, load_scenario
+from tangle_drake.scenario import Scenario, load_scenario, parse_scenario
+from tangle_drake.scenario.yaml_io import TaggedLoader, dump, merge, one_line
 
 DEFAULT_SCENARIO_NAME = "pick_demo.yaml"
+
+TEXT_SOURCE = "--scenario-text"
+"""How an overlay given as text is named in errors and descriptions."""
 
 
 def resolve_scenario(path: str | Path | None) -> Scenario:
@@ -25,3 +38,107 @@ def scenario_path(path: str | Path | None) -> Path:
             and path.parent in (Path("."), Path("diagrams")):
         return diagrams_dir() / path.name
     return path
+
+
+@dataclass(frozen=True)
+class ScenarioSource:
+    """Where a run's scenario comes from: ``files`` as given (the base, then overlays; none:
+    ``default``, a shipped name or a path) and ``texts`` (overlays merged last)."""
+
+    files: tuple[Path, ...] = ()
+    texts: tuple[str, ...] = ()
+    default: str = DEFAULT_SCENARIO_NAME
+
+    def with_default(self, default: str | Path) -> ScenarioSource:
+        """This source, with ``default`` as the base when no file was given."""
+        return ScenarioSource(self.files, self.texts, str(default))
+
+    @property
+    def given(self) -> tuple[Path, ...]:
+        """The files as given, the default base when none was."""
+        return self.files or (Path(self.default),)
+
+    @property
+    def overlays(self) -> int:
+        return len(self.given) - 1 + len(self.texts)
+
+    @property
+    def name(self) -> str:
+        """The scenario as errors and reports name it: its files and overlays, as given."""
+        return " + ".join([str(path) for path in self.given] + [TEXT_SOURCE] * len(self.texts))
+
+    def documents(self) -> list[tuple[str, str]]:
+        """(name, text) of the base and each overlay, in the order they merge."""
+        documents = []
+        for given in self.given:
+            path = scenario_path(given)
+            try:
+                documents.append((str(given), path.read_text()))
+            except OSError as error:
+                raise TangleDrakeError(
+                    f"cannot read scenario file {path}: {error.strerror}") from error
+        return documents + [(TEXT_SOURCE, text) for text in self.texts]
+
+    def text(self) -> str:
+        """The scenario's YAML text: a single file's own text (so its digest is the file's),
+        else the documents merged into one."""
+        documents = self.documents()
+        if len(documents) == 1:
+            return documents[0][1]
+        merged: object = {}
+        for name, text in documents:
+            merged = merge(merged, _mapping(name, text))
+        return dump(merged)
+
+    def load(self) -> Scenario:
+        """The validated scenario; a field an overlay names wrongly is refused with the
+        overlay's name and the field's."""
+        documents = self.documents()
+        if len(documents) == 1:
+            return parse_scenario(documents[0][1], source=documents[0][0])
+        try:
+            return parse_scenario(self.text(), source=self.name)
+        except TangleDrakeError as error:
+            field = re.search(r"scenario field '([^']+)'", str(error))
+            named = [name for name, text in documents
+                     if field and _names_field(_mapping(name, text), field.group(1))]
+            if not named:
+                raise
+            detail = str(error).removeprefix(f"{self.name}: ")
+            raise TangleDrakeError(f"{named[-1]} (overlaid on {documents[0][0]}): "
+                                   f"{detail}") from error
+
+
+def scenario_source(files: ScenarioSource | Sequence[str | Path] | str | Path | None = None,
+                    texts: Sequence[str] = ()) -> ScenarioSource:
+    """A :class:`ScenarioSource` from what a command or a caller was given (a source is
+    returned as it is)."""
+    if isinstance(files, ScenarioSource):
+        return files
+    if files is None:
+        files = ()
+    elif isinstance(files, str | Path):
+        files = (files,)
+    return ScenarioSource(tuple(Path(path) for path in files), tuple(texts))
+
+
+def _mapping(name: str, text: str) -> dict:
+    try:
+        raw = yaml.load(text, Loader=TaggedLoader)
+    except yaml.YAMLError as error:
+        raise TangleDrakeError(f"{name} is not valid YAML: {one_line(error)}") from error
+    if raw is None:
+        return {}
+    if not isinstance(raw, dict):
+        raise TangleDrakeError(f"{name}: a scenario must be a mapping of fields")
+    return raw
+
+
+def _names_field(raw: object, field: str) -> bool:
+    """Whether the document ``raw`` sets the dotted ``field`` (list indices dropped)."""
+    for key in re.sub(r"\[\d+\]", "", field).split("."):
+        value = getattr(raw, "value", raw)  # a driver variant's fields
+        if not isinstance(value, dict) or key not in value:
+            return False
+        raw = value[key]
+    return True

@@ -1,0 +1,110 @@
+"""Overlays: a base scenario with files and texts merged onto it, as Drake's ``hardware_sim``
+takes ``--scenario_text``. An overlay changes exactly the fields it names, a field it names
+wrongly is refused with the overlay's name, and the clearings' overlays give back the very
+scenarios their results ran on."""
+
+import hashlib
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+from pydrake.common.yaml import yaml_dump_typed
+
+from tangle_drake.errors import TangleDrakeError
+from tangle_drake.paths import diagrams_dir
+from tangle_drake.scenario import load_scenario
+from tangle_drake.scenario.files import scenario_source
+from tangle_drake.scenario.yaml_io import Tagged, TaggedLoader
+
+ROOT = Path(__file__).resolve().parent.parent
+OVERLAYS = ROOT / "docs" / "results" / "clearing" / "overlays"
+
+
+def leaves(tree: object, prefix: str = "") -> dict[str, object]:
+    """Every scalar of a YAML tree by its dotted path (a variant's tag as ``PATH.!``)."""
+    if isinstance(tree, Tagged):
+        return {f"{prefix}.!": tree.tag, **leaves(tree.value, prefix)}
+    if isinstance(tree, dict):
+        return {path: value for key, item in tree.items()
+                for path, value in leaves(item, f"{prefix}.{key}" if prefix else key).items()}
+    if isinstance(tree, list):
+        return {path: value for i, item in enumerate(tree)
+                for path, value in leaves(item, f"{prefix}[{i}]").items()}
+    return {prefix: tree}
+
+
+def typed(scenario) -> dict[str, object]:
+    return leaves(yaml.load(yaml_dump_typed(scenario), Loader=TaggedLoader))
+
+
+@pytest.mark.parametrize(("base", "overlay", "changed"), [
+    ("pick_demo.yaml", "model_drivers: {nextage: {planning_slow_speed: 0.06}}",
+     {"model_drivers.nextage.planning_slow_speed": 0.06}),
+    ("floating_gripper.yaml", "pile: {seed: 7}\nrandom_seed: 3",
+     {"pile.seed": 7, "random_seed": 3}),
+    ("pick_demo.yaml", "force_torque_sensors: {wrist: {force_noise: 0.5}}",
+     {"force_torque_sensors.wrist.force_noise": 0.5}),
+    ("pick_demo.yaml", "bin: {floor_height: 0.95}", {"bin.floor_height": 0.95}),
+])
+def test_an_overlay_changes_exactly_the_fields_it_names(base, overlay, changed):
+    before = typed(scenario_source(base).load())
+    after = typed(scenario_source(base, [overlay]).load())
+    differing = {path: after[path] for path in before.keys() | after.keys()
+                 if before.get(path) != after.get(path)}
+    assert differing == changed
+
+
+def test_overlays_merge_in_order_files_first_then_texts(tmp_path):
+    first = tmp_path / "first.yaml"
+    first.write_text("pile: {seed: 1, parts: [{part: c_ring, count: 4}]}\n")
+    second = tmp_path / "second.yaml"
+    second.write_text("pile: {seed: 2}\n")
+    scenario = scenario_source(["pick_demo.yaml", first, second], ["pile: {seed: 3}"]).load()
+    assert scenario.pile.seed == 3
+    assert [(p.part, p.count) for p in scenario.pile.parts] == [("c_ring", 4)]  # lists replaced
+
+
+def test_one_file_is_its_own_text_so_its_digest_is_the_files():
+    source = scenario_source("floating_gripper.yaml")
+    assert source.text() == (diagrams_dir() / "floating_gripper.yaml").read_text()
+    assert source.name == "floating_gripper.yaml"
+
+
+@pytest.mark.parametrize(("overlay", "field"), [
+    ("bin: {floor_hieght: 0.9}", "bin.floor_hieght"),
+    ("random_seed: -1", "random_seed"),
+    ("model_drivers: {nextage: {planning_slow_sped: 0.1}}", "planning_slow_sped"),
+])
+def test_a_wrong_field_is_refused_with_the_overlay_and_the_field(overlay, field, tmp_path):
+    path = tmp_path / "variant.yaml"
+    path.write_text(overlay + "\n")
+    with pytest.raises(TangleDrakeError) as refused:
+        scenario_source(["pick_demo.yaml", path]).load()
+    message = str(refused.value)
+    assert message.startswith(f"{path} (overlaid on pick_demo.yaml):") and field in message
+
+
+def test_the_command_line_takes_overlays_and_refuses_a_wrong_one_in_one_line(tmp_path):
+    command = [sys.executable, "-m", "tangle_drake.cli", "scene", "--out", str(tmp_path / "s"),
+               "--scenario", "pile_only.yaml", "--scenario-text", "pile: {sede: 3}"]
+    refused = subprocess.run(command, capture_output=True, text=True, timeout=120)
+    assert refused.returncode == 2 and "Traceback" not in refused.stderr
+    assert refused.stderr.strip().splitlines() == [
+        "error: --scenario-text (overlaid on pile_only.yaml): scenario field 'pile.sede': "
+        "The fields ['sede'] were unknown to the schema"]
+
+
+@pytest.mark.parametrize(("result", "files"), [
+    ("arm_brisk", ["pick_demo.yaml", "arm_brisk.yaml"]),
+    ("arm_brisk_6cm", ["pick_demo.yaml", "arm_brisk.yaml", "slow_stretch_6cm.yaml"]),
+    ("noise_x2", ["floating_gripper.yaml", "wrist_noise_x2.yaml"]),
+    ("noise_x5", ["floating_gripper.yaml", "wrist_noise_x5.yaml"]),
+])
+def test_the_clearings_overlays_give_the_scenarios_their_results_ran_on(result, files):
+    folder = ROOT / "docs" / "results" / "clearing" / result
+    recorded = (folder / "scenario.yaml").read_bytes()
+    assert hashlib.sha256(recorded).hexdigest() in (folder / "bench.json").read_text()
+    paths = [files[0], *(OVERLAYS / name for name in files[1:])]
+    assert typed(scenario_source(paths).load()) == typed(load_scenario(folder / "scenario.yaml"))
