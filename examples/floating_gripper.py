@@ -24,8 +24,8 @@ from dataclasses import replace
 
 from pydrake.systems.sensors import CameraConfig
 
+from tangle_drake.episode.run import PickEpisode
 from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
-from tangle_drake.pick.episode import PickEpisode
 from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.selection import resolve_tangle_choice
 from tangle_drake.pile import settle_pile

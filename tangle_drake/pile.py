@@ -2,7 +2,7 @@
 
 :func:`settle_pile` (once) and :class:`PileSettler` (pile after pile on one station) are the
 episode's first half, used by every command that makes a pile; the second half, picking, is
-:mod:`tangle_drake.pick.episode`.
+:mod:`tangle_drake.episode.run`.
 
 Parts are placed one by one at random poses above the bin, each checked against the bin and
 the parts already placed with SceneGraph's penetration query, so nothing starts interpenetrating.

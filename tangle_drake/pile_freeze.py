@@ -29,6 +29,12 @@ from pydrake.systems.framework import Context
 from tangle_drake.bin_model import BIN_MODEL, inside_bin
 from tangle_drake.scenario import BinConfig
 
+FREEZE_BEYOND_RADII = 2.0
+"""Parts whose centre lies farther than this many bounding radii (horizontally) from the
+lifted target's are frozen: the target rises straight up and every part lies within one
+bounding radius of its centre, so it can never touch them; only a part it drags along could,
+and would then meet an immovable neighbour instead of a movable one."""
+
 
 def parts_beyond(centres: np.ndarray, bin_config: BinConfig, point_xy: np.ndarray,
                  distance: float) -> list[int]:

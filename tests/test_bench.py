@@ -20,13 +20,13 @@ from pydrake.math import RigidTransform
 from tangle_drake.bench.clear_report import figures
 from tangle_drake.bench.clearing import EscapeWatch
 from tangle_drake.bench.gallery import GALLERY, INDEX, TILE_KEY, tile_path
-from tangle_drake.bench.methods import MethodRun, MethodSelector, parse_method
 from tangle_drake.bench.report import terminal_summary
 from tangle_drake.bench.results import IDENTITY_FILE, RESULTS_FILE
 from tangle_drake.bench.runner import BenchOptions, plan, run_bench
 from tangle_drake.bench.trials import classify, method_seed, pile_seed
 from tangle_drake.cli import main
 from tangle_drake.crops import CropSpec
+from tangle_drake.episode.methods import MethodRun, MethodSelector, parse_method
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.paths import diagrams_dir, shown_path
@@ -384,7 +384,7 @@ def test_perturbed_physics_is_one_draw_per_pile_and_part_of_the_runs_identity():
 
     from tangle_drake.bench.runner import identity
     from tangle_drake.bench.trials import trial_physics
-    from tangle_drake.tangle_data.perturb import PhysicsSpread
+    from tangle_drake.station.perturb import PhysicsSpread
 
     config, _, _ = plan(replace(QUICK, perturb=True))
     assert identity(config)["physics"] == asdict(PhysicsSpread())

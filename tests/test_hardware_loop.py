@@ -201,7 +201,7 @@ def test_the_demo_picks_one_part_through_the_hardware_interface():
     """``tangle-drake demo --hardware --with-hardware-sim``: the unchanged pick diagram, its
     station built with hardware=True, against the hardware simulator: one whole pick (look,
     plan, approach, grasp, lift, check, place)."""
-    from tangle_drake.pick.demo import DemoOptions, run_demo
+    from tangle_drake.episode.demo import DemoOptions, run_demo
     from tangle_drake.pick.diagram import pick_settings
     from tangle_drake.pick.outcome import Outcome
 
@@ -226,7 +226,7 @@ def test_the_closed_loop_weighs_over_lcm_with_the_same_diagram(tmp_path):
     """The closed loop against the hardware simulator: the wrist sensor's messages are all
     the controller has to count the parts with, and all the pick log labels grasps with."""
     from tangle_drake.dataset import load_samples
-    from tangle_drake.pick.demo import DemoOptions, run_demo
+    from tangle_drake.episode.demo import DemoOptions, run_demo
     from tangle_drake.pick.recovery import Disposition
 
     scenario = load_scenario(diagrams_dir() / "floating_gripper.yaml")

@@ -4,17 +4,11 @@ counts as one) import each other, directly or around a longer loop."""
 from __future__ import annotations
 
 import ast
+import re
 from collections import defaultdict
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent.parent / "tangle_drake"
-
-UNTANGLED_LATER: set[frozenset[str]] = {
-    frozenset(("bench", "tangle_data")),  # the physical pick: to become the one episode
-    frozenset(("pick", "tangle_data")),  # the demo's pick log: the demo above both
-}
-"""Pairs of packages that still import each other, to be untangled by the next steps of the
-run-shape refactor; a pair leaves this set when its loop is gone (the test says so)."""
 
 
 def unit(module: str) -> str:
@@ -75,21 +69,51 @@ def loops(graph: dict[str, dict[str, set[str]]]) -> list[list[str]]:
 
 def test_no_two_packages_import_each_other():
     graph = import_graph()
-    pairs = {frozenset((a, b)) for a in graph for b in graph[a] if a in graph.get(b, {})}
-    new = sorted(sorted(pair) for pair in pairs - UNTANGLED_LATER)
-    assert not new, "packages that import each other:\n" + "\n".join(
-        f"{a} <-> {b}: {sorted(graph[a][b])} / {sorted(graph[b][a])}" for a, b in new)
-    gone = sorted(sorted(pair) for pair in UNTANGLED_LATER - pairs)
-    assert not gone, f"untangled, take them out of UNTANGLED_LATER: {gone}"
+    pairs = sorted({tuple(sorted((a, b))) for a in graph for b in graph[a]
+                    if a in graph.get(b, {})})
+    assert not pairs, "packages that import each other:\n" + "\n".join(
+        f"{a} <-> {b}: {sorted(graph[a][b])} / {sorted(graph[b][a])}" for a, b in pairs)
 
 
 def test_no_longer_loop_of_packages():
-    graph = import_graph()
-    allowed = set().union(*UNTANGLED_LATER) if UNTANGLED_LATER else set()
-    found = [component for component in loops(graph) if not set(component) <= allowed]
-    assert not found, f"import loops through several packages: {found}"
+    assert not loops(import_graph()), "import loops through several packages"
 
 
 def test_the_check_finds_a_loop():
     graph = {"a": {"b": {"a.py"}}, "b": {"c": {"b.py"}}, "c": {"a": {"c.py"}}, "d": {}}
     assert loops(graph) == [["a", "b", "c"]]
+
+
+LAYOUT = PACKAGE.parent / "docs" / "systems.md"
+ROW = re.compile(r"^\| ([a-z ]+) \| (`tangle_drake/[^|]+) \|", re.M)
+
+
+def layout_stages() -> dict[str, int]:
+    """Each unit of the layout table (docs/systems.md) by its stage's place in the order."""
+    stages: list[str] = []
+    found: dict[str, int] = {}
+    for stage, cell in ROW.findall(LAYOUT.read_text()):
+        if stage not in stages:
+            stages.append(stage)
+        for path in re.findall(r"`([^`]+)`", cell):
+            name = path.removeprefix("tangle_drake/").removesuffix("/").removesuffix(".py")
+            assert name not in found, f"the layout names {name} twice"
+            found[name] = stages.index(stage)
+    return found
+
+
+def test_the_layout_table_names_every_package_once():
+    units = {path.stem for path in PACKAGE.iterdir()
+             if (path.is_dir() and (path / "__init__.py").exists())
+             or (path.suffix == ".py" and path.name != "__init__.py")}
+    units |= {path.name for path in PACKAGE.iterdir() if path.is_dir()
+              and not path.name.startswith("__") and any(path.iterdir())}
+    assert set(layout_stages()) == units
+
+
+def test_every_import_goes_to_the_same_or_an_earlier_stage():
+    stage = layout_stages()
+    backwards = sorted(f"{a} ({stage[a]}) imports {b} ({stage[b]}): {sorted(files)[0]}"
+                       for a, imported in import_graph().items() if a in stage
+                       for b, files in imported.items() if stage[b] > stage[a])
+    assert not backwards, "\n".join(backwards)

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from pydrake.geometry import Meshcat, MeshcatParams
 
-from tangle_drake.pick.demo import DemoOptions, run_demo
+from tangle_drake.episode.demo import DemoOptions, run_demo
 from tangle_drake.pick.meshcat_view import (
     CHOSEN_RGBA,
     ROOT,

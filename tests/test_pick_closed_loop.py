@@ -295,8 +295,8 @@ def test_the_rules_never_deliver_a_doubt():
 def test_a_simulated_closed_loop_pick_is_weighed_and_delivered_to_the_tray():
     from dataclasses import replace
 
+    from tangle_drake.episode.run import PickEpisode
     from tangle_drake.pick.diagram import build_pick_diagram, closed_loop_settings
-    from tangle_drake.pick.episode import PickEpisode
     from tangle_drake.pick.selection import TangleChoice
     from tangle_drake.pile import settle_pile
     from tangle_drake.planning.motions import motion_for

@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 from cli_run import run_command
 
-from tangle_drake.bench.methods import MethodRun, MethodSelector
 from tangle_drake.dataset import finished_tasks, load_samples, read_manifest
+from tangle_drake.episode.methods import MethodRun, MethodSelector
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import GraspCandidate
+from tangle_drake.station.perturb import ContactScaler, PhysicsSpread, PickPhysics, offset_pose
 from tangle_drake.tangle_data.ceiling import pick_ceiling, rule_choice
 from tangle_drake.tangle_data.collect import collect_picks
-from tangle_drake.tangle_data.perturb import ContactScaler, PhysicsSpread, PickPhysics, offset_pose
 from tangle_drake.tangle_data.physical import PhysicalPickSimulator, PickDataSettings
 
 SETTINGS = PickDataSettings(part="c_ring", parts_per_pile=4, top_k=2)
@@ -85,8 +85,8 @@ def test_an_interrupted_collection_resumes_to_the_same_picks(uninterrupted, tmp_
 
 
 def test_the_fast_pick_ends_an_empty_close_there_with_the_full_picks_outcome():
-    from tangle_drake.bench.methods import Method
-    from tangle_drake.bench.physical_pick import PickRig
+    from tangle_drake.episode.methods import Method
+    from tangle_drake.episode.single_pick import PickRig
     from tangle_drake.paths import diagrams_dir
     from tangle_drake.pick.outcome import Outcome
     from tangle_drake.tangle_data.physical import PICK_SCENARIO, pick_data_scenario

@@ -5,7 +5,7 @@ import base64
 import re
 from dataclasses import replace
 
-from tangle_drake.pick.demo import DemoOptions, run_demo
+from tangle_drake.episode.demo import DemoOptions, run_demo
 from tangle_drake.pick.outcome import Outcome
 from tangle_drake.scenario.files import resolve_scenario
 

@@ -5,8 +5,8 @@ from dataclasses import replace
 
 import pytest
 
+from tangle_drake.episode.run import PickEpisode, RunEnd
 from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
-from tangle_drake.pick.episode import PickEpisode, RunEnd
 from tangle_drake.pick.selection import TangleChoice
 from tangle_drake.pile import PileSettler, settle_pile
 from tangle_drake.planning.motions import motion_for

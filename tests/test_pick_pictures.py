@@ -4,7 +4,7 @@ at the top of the lift, and the crop the CNN saw."""
 import cv2
 import numpy as np
 
-from tangle_drake.pick.demo import DemoOptions, run_demo
+from tangle_drake.episode.demo import DemoOptions, run_demo
 from tangle_drake.pick.pictures import CHOSEN, TILE
 from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.station import camera_model

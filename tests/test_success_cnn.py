@@ -14,9 +14,9 @@ import pytest
 import torch
 from cli_run import run_command
 
-from tangle_drake.bench.methods import parse_method
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.dataset import load_samples
+from tangle_drake.episode.methods import parse_method
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import shown_path
 from tangle_drake.pick.selection import resolve_tangle_choice

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tangle_drake.bench.methods import parse_method
 from tangle_drake.crops import DEFAULT_CROP
+from tangle_drake.episode.methods import parse_method
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.parts.catalog import BUILTIN_PARTS
 from tangle_drake.pick.selection import TRAINED_DIR, resolve_tangle_choice, trained_model_path

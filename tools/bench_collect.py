@@ -30,11 +30,12 @@ from dataclasses import replace
 
 import numpy as np
 
+from tangle_drake.dataset.store import TaskResult
 from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.tangle_data.collect import default_scenario_text
 from tangle_drake.tangle_data.defaults import default_parts_per_pile
 from tangle_drake.tangle_data.settings import CollectSettings, LiftSettings
-from tangle_drake.tangle_data.simulator import TangleDataSimulator, TaskResult, data_scenario
+from tangle_drake.tangle_data.simulator import TangleDataSimulator, data_scenario
 from tangle_drake.workers import start_workers
 
 REFERENCE_LIFTS = {

@@ -18,8 +18,8 @@ import collections
 import itertools
 import time
 
+from tangle_drake.episode.demo import DemoOptions, run_demo
 from tangle_drake.graspability.system import GraspabilitySystem
-from tangle_drake.pick.demo import DemoOptions, run_demo
 from tangle_drake.pick.planner import PickPlanner
 from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.tangle_cnn.system import TangleCnnSystem

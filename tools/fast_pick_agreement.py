@@ -4,7 +4,7 @@ For each pile (the collection's pile seeds, not the benchmark's) and each of gra
 first ``--top-k`` candidates, picks three times from the same settled pile under the model's
 physics: the full pick (the benchmark's), the same pick with the grasp moved 0.1 mm (the
 simulator's own re-run agreement: chaotic contact makes a pick's outcome a draw), and the fast
-pick of ``collect --label pick`` (:class:`~tangle_drake.bench.physical_pick.PickRig`,
+pick of ``collect --label pick`` (:class:`~tangle_drake.episode.single_pick.PickRig`,
 ``fast``). Prints per-pick agreement of each with the full pick, the outcome rates of both with
 95 % intervals, and picks per minute of each (wall). One JSON line per pile in ``--out``: run
 the same command again to resume.
@@ -21,12 +21,12 @@ import time
 from collections import Counter
 from pathlib import Path
 
-from tangle_drake.bench.methods import Method, MethodRun
-from tangle_drake.bench.physical_pick import PickRig
-from tangle_drake.bench.trials import scenario_mode
+from tangle_drake.episode.methods import Method, MethodRun
+from tangle_drake.episode.single_pick import PickRig
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.paths import diagrams_dir
+from tangle_drake.planning.motions import scenario_mode
 from tangle_drake.stats import wilson
 from tangle_drake.tangle_data.physical import PICK_SCENARIO, PickDataSettings, pick_data_scenario
 from tangle_drake.tangle_data.seeds import pile_seed

@@ -20,16 +20,16 @@ from typing import Any
 import numpy as np
 from pydrake.systems.framework import Context
 
-from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
 from tangle_drake.bench.trials import BenchConfig, PartSpec, method_seed, part_scenario, pile_seed
 from tangle_drake.bin_model import inside_bin
+from tangle_drake.episode.methods import Method, MethodRun, selection_wiring
+from tangle_drake.episode.run import POLL, PickEpisode
 from tangle_drake.pick.diagram import (
     PickDiagram,
     build_pick_diagram,
     closed_loop_settings,
     pick_settings,
 )
-from tangle_drake.pick.episode import POLL, PickEpisode
 from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice

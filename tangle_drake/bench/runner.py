@@ -20,7 +20,6 @@ from pathlib import Path
 from tangle_drake.bench.clear_report import summarize_clearing, write_clear_report
 from tangle_drake.bench.clearing import ClearWorker
 from tangle_drake.bench.gallery import save_tiles, write_index
-from tangle_drake.bench.methods import DEFAULT_METHODS, Method, file_digest, parse_method
 from tangle_drake.bench.report import summarize_run, write_report
 from tangle_drake.bench.results import ResultStore
 from tangle_drake.bench.trials import (
@@ -31,8 +30,8 @@ from tangle_drake.bench.trials import (
     TrialWorker,
     part_scenario,
     pile_seed,
-    scenario_mode,
 )
+from tangle_drake.episode.methods import DEFAULT_METHODS, Method, file_digest, parse_method
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.parts.library import part_digest
@@ -44,10 +43,11 @@ from tangle_drake.pick.diagram import (
 )
 from tangle_drake.pick.selection import model_part_notice
 from tangle_drake.pile import check_pile
+from tangle_drake.planning.motions import scenario_mode
 from tangle_drake.progress import Progress
 from tangle_drake.provenance import made_by
 from tangle_drake.scenario.files import ScenarioSource, scenario_source
-from tangle_drake.tangle_data.perturb import PhysicsSpread
+from tangle_drake.station.perturb import PhysicsSpread
 from tangle_drake.workers import start_workers
 
 DEFAULT_TRIALS = 50
@@ -85,7 +85,7 @@ class BenchOptions:
     gallery: bool = False
     """Write a tile of each failed pick into ``out/gallery`` (:mod:`.gallery`)."""
     perturb: bool = False
-    """Pick under perturbed physics (:class:`~tangle_drake.tangle_data.perturb.PhysicsSpread`,
+    """Pick under perturbed physics (:class:`~tangle_drake.station.perturb.PhysicsSpread`,
     one draw per pile)."""
     show_progress: bool | None = None
     command: str = "tangle-drake bench"

@@ -3,9 +3,9 @@
 A trial is (part, trial index); its pile seed derives from (run seed, part, index) alone, so
 every method sees the same piles (the comparison is paired), whichever worker runs the trial
 and whenever (a resumed run redoes exactly the missing trials). The pile is dropped once in a
-bare copy of the station; its settled plant state is restored into the pick diagram before
-each method's pick (:mod:`.physical_pick`). The worker (:class:`TrialWorker`) builds a part's
-rig once and reuses it for every trial of that part.
+bare copy of the station; its settled plant state is restored into the pick diagram before each
+method's pick (:mod:`tangle_drake.episode.single_pick`). The worker (:class:`TrialWorker`)
+builds a part's rig once and reuses it for every trial of that part.
 """
 
 from __future__ import annotations
@@ -19,15 +19,12 @@ from typing import Any
 import numpy as np
 
 from tangle_drake.bench.gallery import TILE_KEY, caption, failure_kind, timed_tile
-from tangle_drake.bench.methods import Method, MethodRun
-from tangle_drake.bench.physical_pick import PickRig
-from tangle_drake.drivers.registry import carrier
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.episode.methods import Method, MethodRun
+from tangle_drake.episode.single_pick import PickRig
 from tangle_drake.failures import FailureKind
 from tangle_drake.pick.outcome import Outcome, PickRecord
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
-from tangle_drake.scenario.drivers import GantryDriver
-from tangle_drake.tangle_data.perturb import PhysicsSpread, PickPhysics
+from tangle_drake.station.perturb import PhysicsSpread, PickPhysics
 
 MODE_SCENARIOS = {"floating": "floating_gripper.yaml", "arm": "pick_demo.yaml"}
 """The shipped scenario of each ``--mode``: the gripper on the gantry, or on the Nextage."""
@@ -73,15 +70,6 @@ class BenchConfig:
     """Draw a tile of each failed pick (:mod:`.gallery`); not part of the run's identity."""
     physics: PhysicsSpread | None = None
     """Pick under perturbed physics, one draw per pile for every method (``--perturb``)."""
-
-
-def scenario_mode(scenario: Scenario, source: str) -> str:
-    """``floating`` for a scenario whose gripper rides the gantry, ``arm`` for the Nextage."""
-    try:
-        _, config = carrier(scenario.model_drivers)
-    except TangleDrakeError as error:
-        raise TangleDrakeError(f"{source}: the benchmark picks, so {error}") from error
-    return "floating" if isinstance(config, GantryDriver) else "arm"
 
 
 def _stream(seed: int, part: str, trial: int, purpose: int) -> np.random.SeedSequence:

@@ -65,7 +65,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from tangle_drake.pick.demo import DemoOptions, run_demo
+    from tangle_drake.episode.demo import DemoOptions, run_demo
 
     run_demo(DemoOptions(
         picks=args.picks, part=args.part, scenario=scenario_from(args), seed=args.seed,

@@ -21,11 +21,10 @@ from pathlib import Path
 import numpy as np
 
 from tangle_drake.crops import CropSpec
+from tangle_drake.dataset.store import DatasetStore, TaskResult
 from tangle_drake.gripper import GripperSpec
 from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.pick.recovery import Verdict
-from tangle_drake.tangle_data.simulator import TaskResult
-from tangle_drake.tangle_data.store import DatasetStore
 
 SOURCE = "pick log"
 """The manifest's ``source`` of a pick log (a collection has none)."""

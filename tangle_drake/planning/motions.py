@@ -11,6 +11,15 @@ from tangle_drake.scenario import Scenario
 from tangle_drake.scenario.drivers import GantryDriver, NextageDriver
 
 
+def scenario_mode(scenario: Scenario, source: str) -> str:
+    """``floating`` for a scenario whose gripper rides the gantry, ``arm`` for the Nextage."""
+    try:
+        _, config = carrier(scenario.model_drivers)
+    except TangleDrakeError as error:
+        raise TangleDrakeError(f"{source}: {error}") from error
+    return "floating" if isinstance(config, GantryDriver) else "arm"
+
+
 def motion_for(scenario: Scenario, *, return_home: bool = True) -> Motion:
     """The motion planner of the scenario's carrier: ``ArmMotion`` for a ``!NextageDriver``
     (IK and collision checks), ``GantryMotion`` for a ``!GantryDriver``; picked parts are

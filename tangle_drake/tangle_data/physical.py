@@ -4,16 +4,16 @@ The seed paper's second baseline (Matsumura et al. 2018) learns from simulated p
 physical gripper, not from a force that lifts one part. A task here is one settled pile of the
 benchmark's scenario (the floating gripper by default): graspability's first ``top_k``
 candidates are picked one by one, each from the same settled pile restored
-(:class:`~tangle_drake.bench.physical_pick.PickRig`, the benchmark's own pick), and each is
-stored with what came up, counted by the simulation: ``outcome`` 1 = exactly one part,
-2 = several, 0 = none, in the codes of the pick log (:mod:`tangle_drake.pick.pick_log`), and
+(:class:`~tangle_drake.episode.single_pick.PickRig`, the benchmark's own pick), and each is
+stored with what came up, counted by the simulation: ``outcome`` 1 = exactly one part, 2 =
+several, 0 = none, in the codes of the pick log (:mod:`tangle_drake.pick.pick_log`), and
 ``label`` (tangled) 1 = several, 0 = one, -1 = none. A candidate that could not be picked
 (unreachable, in collision) is no label: the task's record lists it with its reason. So the
 dataset says, per pile, what each of the five candidates would have done: the top-5 oracle.
 Each pick runs under its own draw of the physics (friction, the pads' stiffness, a few mm and
-degrees of grasp error; :class:`~.perturb.PhysicsSpread`), recorded in the task's record, and
-its crop is cut from the depth image with the camera's noise added (:func:`noisy_depth`): a
-real sensor's depth is never the renderer's.
+degrees of grasp error; :class:`~tangle_drake.station.perturb.PhysicsSpread`), recorded in the
+task's record, and its crop is cut from the depth image with the camera's noise added
+(:func:`noisy_depth`): a real sensor's depth is never the renderer's.
 
 Pile seeds come from the collection seed (:mod:`.seeds`), not the benchmark's, so a model
 trained on these piles is tested on others.
@@ -28,22 +28,22 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from tangle_drake.bench.methods import Method, MethodRun
-from tangle_drake.bench.physical_pick import PhysicalPick, PickRig
-from tangle_drake.bench.trials import scenario_mode
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.crops import DEFAULT_CROP, CropSpec, extract_crop
 from tangle_drake.dataset import rows_to_arrays
+from tangle_drake.dataset.store import TaskResult
+from tangle_drake.episode.methods import Method, MethodRun
+from tangle_drake.episode.single_pick import PhysicalPick, PickRig
 from tangle_drake.errors import TangleDrakeError, check_seed
 from tangle_drake.failures import FailureKind
 from tangle_drake.parts import load_part
 from tangle_drake.pick import pick_log
 from tangle_drake.pick.outcome import Outcome
 from tangle_drake.pick.recovery import Verdict
+from tangle_drake.planning.motions import scenario_mode
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
-from tangle_drake.tangle_data.perturb import PhysicsSpread, PickPhysics
+from tangle_drake.station.perturb import PhysicsSpread, PickPhysics
 from tangle_drake.tangle_data.seeds import depth_noise_rng, physics_rng, pile_seed
-from tangle_drake.tangle_data.simulator import TaskResult
 
 LABEL = "pick"
 """The ``--label`` of physical-pick data (the auto-lift's is ``lift``)."""
@@ -77,7 +77,7 @@ class PickDataSettings:
     sensor's ~0.1-0.5 mm at half a metre. The graspability candidates, which the pick
     executes, come from the clean image. 0: the renderer's depth."""
     fast: bool = True
-    """The rig's shortcut (:class:`~tangle_drake.bench.physical_pick.PickRig`): a grasp that
+    """The rig's shortcut (:class:`~tangle_drake.episode.single_pick.PickRig`): a grasp that
     closed on nothing ends at the close, with the outcome the lift would have ended with."""
 
     def validate(self) -> None:

@@ -13,6 +13,7 @@ from dataclasses import asdict, dataclass, field
 from tangle_drake.crops import DEFAULT_CROP, CropSpec
 from tangle_drake.errors import TangleDrakeError, check_seed
 from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.pile_freeze import FREEZE_BEYOND_RADII
 
 
 @dataclass(frozen=True)
@@ -37,12 +38,11 @@ class LiftSettings:
     max_force_n: float = 40.0
     """Cap on the spring's pull, about what the default gripper's pads hold in friction
     (2 fingers x 40 N x 0.5); a target held harder than this by the pile stalls."""
-    freeze_beyond_radii: float = 2.0
+    freeze_beyond_radii: float = FREEZE_BEYOND_RADII
     """Parts whose centre lies farther than this many bounding radii (horizontally) from
-    the target's are locked in place during the lift. The target rises straight up and
-    every part lies within one bounding radius of its centre, so it can never touch them;
-    only a part it drags along could, and would then meet an immovable neighbour instead of
-    a movable one. Each step costs markedly less. 0 keeps every part free."""
+    the target's are locked in place during the lift (why it is safe:
+    :data:`~tangle_drake.pile_freeze.FREEZE_BEYOND_RADII`). Each step costs markedly less. 0
+    keeps every part free."""
     early_exit: bool = True
     """End the lift as soon as its record cannot change any more (the target and what it
     lifted are above every part they could touch, nothing is on its way up), and the hold

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import resource
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from tangle_drake.bin_model import inner_corners, inside_bin
 from tangle_drake.crops import extract_crop
+from tangle_drake.dataset.store import TaskResult
 from tangle_drake.graspability import GraspabilityParams, GraspCandidate, bin_roi
 from tangle_drake.graspability import compute_candidates as graspability_candidates
 from tangle_drake.parts import load_part
@@ -25,23 +25,14 @@ from tangle_drake.pile_freeze import PileFreeze
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
 from tangle_drake.scene import render_depth
 from tangle_drake.station import build_station, camera_model
+from tangle_drake.station.perturb import ContactScaler, Perturbation, jiggle_parts
 from tangle_drake.tangle_data.closing_region import RegionBox, parts_in_region, surface_points
 from tangle_drake.tangle_data.labels import PickLabel, label_pick
 from tangle_drake.tangle_data.lift import ForceLift, LiftResult
-from tangle_drake.tangle_data.perturb import ContactScaler, Perturbation, jiggle_parts
 from tangle_drake.tangle_data.pile_stats import pile_depth
 from tangle_drake.tangle_data.samples import SampleRows
 from tangle_drake.tangle_data.seeds import choice_rng, perturbation_rng, pile_seed
 from tangle_drake.tangle_data.settings import CollectSettings
-
-
-@dataclass
-class TaskResult:
-    """One finished task: its samples (dataset arrays) and what happened on the way."""
-
-    task: int
-    samples: dict[str, np.ndarray]
-    stats: dict = field(default_factory=dict)
 
 
 def data_scenario(scenario_text: str, settings: CollectSettings) -> Scenario:

@@ -50,6 +50,7 @@ from tangle_drake.paths import shown_path
 from tangle_drake.pick.selection import default_rule, model_objective, trained_model_path
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import camera_model
+from tangle_drake.station.perturb import offset_pose
 from tangle_drake.tangle_cnn.objectives import (
     DEFAULT_RULES,
     OUTCOME,
@@ -65,7 +66,6 @@ from tangle_drake.tangle_cnn.selection import (
     needs_model,
     rank_candidates,
 )
-from tangle_drake.tangle_data.perturb import offset_pose
 
 DEFAULT_METHODS = ("random", "graspability", "cnn", "harmonic", "success-cnn", "outcome")
 """The methods a run compares unless told otherwise: the paper's comparison (graspability, the
@@ -150,7 +150,7 @@ class MethodRun(NamedTuple):
     labels: one pick per candidate); ``None``: the method's order."""
     offset: tuple[float, float, float] | None = None
     """An error of the grasp pose the robot executes (x, y in m, a turn about the vertical in
-    degrees; :class:`~tangle_drake.tangle_data.perturb.PickPhysics`): every candidate's
+    degrees; :class:`~tangle_drake.station.perturb.PickPhysics`): every candidate's
     ``pose`` is moved by it, what the method saw (``u``, ``v``, ``angle_deg``) is not."""
 
 

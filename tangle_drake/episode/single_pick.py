@@ -15,7 +15,7 @@ closed past the empty width are empty whatever the lift does:
 :func:`~tangle_drake.pick.outcome.classify_lift`), instead of lifting the empty gripper out:
 the same outcome, without the lift's simulated seconds. And from the descent on it keeps the
 parts the grasp cannot reach frozen (:mod:`tangle_drake.pile_freeze`, the auto-lift labeller's
-rule measured from the grasp: centres farther than ``freeze_beyond_radii + 1`` bounding radii,
+rule measured from the grasp: centres farther than ``FREEZE_BEYOND_RADII + 1`` bounding radii,
 since the target's centre lies within one radius of its grasp). Keeping the whole pile locked
 through the descent until the fingers touch it was tried and dropped: a pile frozen for that
 second instead of creeping is another pile, and it changed outcomes where moving the grasp a
@@ -31,21 +31,20 @@ from dataclasses import dataclass, replace
 import numpy as np
 from pydrake.systems.framework import Context
 
-from tangle_drake.bench.methods import Method, MethodRun, selection_wiring
 from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.episode.methods import Method, MethodRun, selection_wiring
+from tangle_drake.episode.run import SIM_TIME_PER_PICK, PickEpisode, RunEnd
 from tangle_drake.parts import load_part
 from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
-from tangle_drake.pick.episode import SIM_TIME_PER_PICK, PickEpisode, RunEnd
 from tangle_drake.pick.outcome import Outcome, PickRecord, classify_lift
 from tangle_drake.pick.planner import Mode
 from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler, SettledPile
-from tangle_drake.pile_freeze import PileFreeze, parts_beyond
+from tangle_drake.pile_freeze import FREEZE_BEYOND_RADII, PileFreeze, parts_beyond
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import build_station, camera_model
-from tangle_drake.tangle_data.perturb import ContactScaler, PickPhysics
-from tangle_drake.tangle_data.settings import LiftSettings
+from tangle_drake.station.perturb import ContactScaler, PickPhysics
 
 FLOATING_SIM_LIMIT = 20.0
 """Simulated seconds a floating-gripper pick may take: several times what one takes, so only a
@@ -99,7 +98,7 @@ class PickRig:
         self._contacts = ContactScaler(station.plant, station.scene_graph)
         self._bin = scenario.bin
         self._freeze = PileFreeze(station.plant, station.scene_graph, station.pile_bodies)
-        self._reach = (LiftSettings().freeze_beyond_radii + 1) * max(
+        self._reach = (FREEZE_BEYOND_RADII + 1) * max(
             load_part(entry.part, mesh_scale=entry.mesh_scale).bounding_radius
             for entry in scenario.pile.parts)
         """Parts whose centre lies farther than this from the grasp stay frozen (``fast``), m."""

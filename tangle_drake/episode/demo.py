@@ -17,6 +17,14 @@ from pydrake.systems.framework import Context, Diagram, EventStatus
 
 from tangle_drake.bin_model import inside_bin
 from tangle_drake.crops import CropSpec
+from tangle_drake.episode.run import (
+    SIM_TIME_PER_PICK,
+    Clock,
+    PickEpisode,
+    PickRun,
+    RunEnd,
+    run_picks,
+)
 from tangle_drake.errors import SafetyStop, TangleDrakeError
 from tangle_drake.graphviz import write_graphviz
 from tangle_drake.gripper import DEFAULT_GRIPPER
@@ -29,14 +37,6 @@ from tangle_drake.pick.diagram import (
     closed_loop_settings,
     pick_settings,
     weighing_warning,
-)
-from tangle_drake.pick.episode import (
-    SIM_TIME_PER_PICK,
-    Clock,
-    PickEpisode,
-    PickRun,
-    RunEnd,
-    run_picks,
 )
 from tangle_drake.pick.meshcat_view import CandidateMarkers, frame_the_work
 from tangle_drake.pick.outcome import PickRecord, summarize

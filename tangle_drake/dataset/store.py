@@ -20,7 +20,10 @@ from __future__ import annotations
 import fcntl
 import json
 import os
+from dataclasses import dataclass, field
 from pathlib import Path
+
+import numpy as np
 
 from tangle_drake.dataset import (
     MANIFEST,
@@ -32,13 +35,21 @@ from tangle_drake.dataset import (
 )
 from tangle_drake.dataset import write_shard as write_shard_arrays
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.tangle_data.simulator import TaskResult
 
 COUNTED = ("samples", "tangled", "immediate", "lifts", "empty_region", "lift_errors",
            "candidates", "repeat_lifts", "repeat_all_agree", "repeat_majority", "cpu_s",
            "one", "none", "failed")
 """Task record fields the manifest sums over all finished tasks (those a kind of data
 lacks count 0: ``one``, ``none`` and ``failed`` are the physical picks')."""
+
+
+@dataclass
+class TaskResult:
+    """One finished task: its samples (dataset arrays) and what happened on the way."""
+
+    task: int
+    samples: dict[str, np.ndarray]
+    stats: dict = field(default_factory=dict)
 
 
 def record_name(task: int) -> str:
