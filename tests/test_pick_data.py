@@ -149,7 +149,7 @@ def test_a_scenario_without_a_gripper_to_pick_with_is_refused(tmp_path):
     from tangle_drake.paths import diagrams_dir
 
     text = (diagrams_dir() / "pile_only.yaml").read_text()
-    with pytest.raises(TangleDrakeError, match="picks"):
+    with pytest.raises(TangleDrakeError, match="the pick-data scenario: picking needs a robot"):
         collect_picks(SETTINGS, tmp_path / "d", 1, workers=1, scenario_text=text,
                       show_progress=False)
 
