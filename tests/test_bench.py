@@ -26,16 +26,17 @@ from tangle_drake.bench.runner import BenchOptions, plan, run_bench
 from tangle_drake.bench.trials import classify, method_seed, pile_seed
 from tangle_drake.cli import main
 from tangle_drake.crops import CropSpec
-from tangle_drake.episode.methods import MethodRun, MethodSelector, parse_method
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.paths import diagrams_dir, shown_path
 from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, classify_lift
-from tangle_drake.pick.selection import RuleSelector
 from tangle_drake.pile import PileSettler
 from tangle_drake.scenario import BinConfig, PartCount
 from tangle_drake.scenario.files import resolve_scenario, scenario_source
+from tangle_drake.selection.choice import trained_model_path
+from tangle_drake.selection.methods import GraspSelector, MethodRun, parse_method
+from tangle_drake.selection.registry import MODEL_PREFIX, REGISTRY
 from tangle_drake.station import build_station, part_bodies
 from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, save_atomic
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
@@ -194,21 +195,35 @@ def test_every_method_sees_the_same_piles(quick_run):
     assert trials[0]["picks"][0]["depth_digest"] != trials[1]["picks"][0]["depth_digest"]
 
 
+def test_every_registered_method_runs_in_the_quick_benchmark(tmp_path):
+    """Each method of the registry, the path forms with the shipped U-hook models, makes its
+    pick on the quick benchmark's pile."""
+    named = {f"{MODEL_PREFIX}PATH": f"{MODEL_PREFIX}{trained_model_path('u_hook')}",
+             "RULE:PATH": f"success-cnn:{trained_model_path('u_hook', 'outcome')}"}
+    methods = [named.get(entry.name, entry.name) for entry in REGISTRY]
+    outcome = run_bench(replace(QUICK, out=tmp_path, trials=1, methods=methods),
+                        say=lambda _: None)
+    ran = {rate["method"] for rate in outcome.summary["rates"] if rate["part"] == "all"}
+    assert len(ran) == len(REGISTRY) == len(methods)
+    assert all(rate["n"] == 1 for rate in outcome.summary["rates"])
+
+
 def test_the_bench_and_the_demo_select_alike_without_a_cnn():
-    """The benchmark's method switch and the demo's rule system give the same order, the
-    same ``random`` draw included: both are ``selection.rank``'s."""
+    """The benchmark's switched selector and the demo's fixed one give the same order, the
+    same ``random`` draw included: one system, the rules' ``rank``."""
     candidates = [SimpleNamespace(u=float(i), v=2.0 * i, angle_deg=10.0 * i, score=1 - i / 10,
                                   pose=None) for i in range(8)]
-    switch = MethodSelector([])
+    switch = GraspSelector([])
     for name in ("random", "graspability"):
         for seed in range(6):
-            rule = RuleSelector(name, seed)
+            fixed = GraspSelector([], MethodRun(name, seed))
+            assert not fixed.HasInputPort("method")
             orders = []
-            for system, extra in ((switch, MethodRun(name, seed)), (rule, None)):
+            for system in (switch, fixed):
                 context = system.CreateDefaultContext()
                 system.GetInputPort("candidates").FixValue(context, candidates)
-                if extra is not None:
-                    system.GetInputPort("method").FixValue(context, extra)
+                if system is switch:
+                    system.GetInputPort("method").FixValue(context, MethodRun(name, seed))
                 scored = system.GetOutputPort("scored_candidates").Eval(context)
                 selected = system.GetOutputPort("selected_grasp").Eval(context)
                 assert selected is scored[0].candidate
@@ -357,7 +372,7 @@ def test_the_mode_chooses_the_scenario_and_a_scenario_its_mode(options, mode, sc
 
 def test_a_cnn_method_without_a_model_is_an_error_or_left_out_of_the_defaults(
         tmp_path, monkeypatch):
-    monkeypatch.setattr("tangle_drake.pick.selection.TRAINED_DIR", tmp_path)
+    monkeypatch.setattr("tangle_drake.selection.choice.TRAINED_DIR", tmp_path)
     with pytest.raises(TangleDrakeError,
                        match=r"'harmonic' needs a model of P\(not tangled\).*u_hook\.pt"):
         plan(replace(QUICK, methods=["graspability", "harmonic"]))
@@ -369,7 +384,7 @@ def test_a_cnn_method_without_a_model_is_an_error_or_left_out_of_the_defaults(
 
 
 def test_the_outcome_method_reads_the_part_s_pick_outcome_model(tmp_path, monkeypatch):
-    monkeypatch.setattr("tangle_drake.pick.selection.TRAINED_DIR", tmp_path)
+    monkeypatch.setattr("tangle_drake.selection.choice.TRAINED_DIR", tmp_path)
     method = parse_method("outcome")
     assert (method.rule, method.model_for("c_ring")) == ("success-harmonic",
                                                           tmp_path / "c_ring.outcome.pt")
@@ -529,7 +544,7 @@ def test_a_scenario_without_parts_is_refused_and_a_scenarios_own_part_is_the_def
 
 
 def test_a_model_of_another_part_is_noticed_in_the_run():
-    from tangle_drake.pick.selection import trained_model_path
+    from tangle_drake.selection.choice import trained_model_path
 
     model = trained_model_path("c_ring")
     _, _, notices = plan(replace(QUICK, methods=["graspability", f"model:{model}"]))

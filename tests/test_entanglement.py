@@ -12,10 +12,10 @@ from pydrake.systems.sensors import ImageDepth32F
 
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.entanglement.emap import EmapParams, entanglement_map
-from tangle_drake.entanglement.system import EntanglementMapSystem
 from tangle_drake.entanglement.writhe import segment_writhe, writhe_matrix
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.tangle_cnn.selection import ScoredCandidate, rank_candidates
+from tangle_drake.selection.emap_system import EntanglementMapSystem
+from tangle_drake.selection.rules import ScoredCandidate, rank_candidates
 
 
 def gauss_writhe(a0, a1, b0, b1, steps: int = 800) -> float:

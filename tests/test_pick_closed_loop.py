@@ -297,11 +297,11 @@ def test_a_simulated_closed_loop_pick_is_weighed_and_delivered_to_the_tray():
 
     from tangle_drake.episode.run import PickEpisode
     from tangle_drake.pick.diagram import build_pick_diagram, closed_loop_settings
-    from tangle_drake.pick.selection import TangleChoice
     from tangle_drake.pile import settle_pile
     from tangle_drake.planning.motions import motion_for
     from tangle_drake.scenario import PartCount
     from tangle_drake.scenario.files import resolve_scenario
+    from tangle_drake.selection.choice import TangleChoice
     from tangle_drake.station import build_station
 
     scenario = resolve_scenario("floating_gripper.yaml")

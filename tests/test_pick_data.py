@@ -12,9 +12,9 @@ import pytest
 from cli_run import run_command
 
 from tangle_drake.dataset import finished_tasks, load_samples, read_manifest
-from tangle_drake.episode.methods import MethodRun, MethodSelector
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import GraspCandidate
+from tangle_drake.selection.methods import GraspSelector, MethodRun
 from tangle_drake.station.perturb import ContactScaler, PhysicsSpread, PickPhysics, offset_pose
 from tangle_drake.tangle_data.ceiling import pick_ceiling, rule_choice
 from tangle_drake.tangle_data.collect import collect_picks
@@ -85,10 +85,10 @@ def test_an_interrupted_collection_resumes_to_the_same_picks(uninterrupted, tmp_
 
 
 def test_the_fast_pick_ends_an_empty_close_there_with_the_full_picks_outcome():
-    from tangle_drake.episode.methods import Method
     from tangle_drake.episode.single_pick import PickRig
     from tangle_drake.paths import diagrams_dir
     from tangle_drake.pick.outcome import Outcome
+    from tangle_drake.selection.methods import Method
     from tangle_drake.tangle_data.physical import PICK_SCENARIO, pick_data_scenario
 
     settings = PickDataSettings(part="e_shape", parts_per_pile=4, physics=None)
@@ -115,7 +115,7 @@ def test_the_fast_pick_ends_an_empty_close_there_with_the_full_picks_outcome():
 def test_a_forced_candidate_is_that_candidate_alone():
     candidates = [SimpleNamespace(u=float(i), v=0.0, angle_deg=0.0, score=1 - i / 10, pose=None)
                   for i in range(4)]
-    switch = MethodSelector([])
+    switch = GraspSelector([])
     context = switch.CreateDefaultContext()
     switch.GetInputPort("candidates").FixValue(context, candidates)
     for rank in range(6):
@@ -233,7 +233,7 @@ def test_the_grasp_error_moves_the_executed_pose_not_what_the_method_saw():
     assert np.array_equal(offset_pose(pose, (0.0, 0.0, 0.0)), pose)
     candidate = GraspCandidate(u=10.0, v=20.0, angle_deg=30.0, width_m=0.03, depth_m=0.5,
                                score=0.9, pose=pose)
-    switch = MethodSelector([])
+    switch = GraspSelector([])
     context = switch.CreateDefaultContext()
     switch.GetInputPort("candidates").FixValue(context, [candidate])
     switch.GetInputPort("method").FixValue(context, MethodRun("graspability", 0, 0,

@@ -8,8 +8,8 @@ from cli_run import run_command
 from tangle_drake.episode.demo import DemoOptions, run_demo
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import diagrams_dir
-from tangle_drake.pick import selection
-from tangle_drake.pick.selection import resolve_tangle_choice
+from tangle_drake.selection import choice as selection
+from tangle_drake.selection.choice import resolve_tangle_choice
 
 run_demo_command = partial(run_command, "demo")
 

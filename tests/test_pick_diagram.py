@@ -2,9 +2,9 @@
 
 from tangle_drake.graspability import GraspabilityParams
 from tangle_drake.pick.diagram import build_pick_diagram, default_graspability_params
-from tangle_drake.pick.selection import TangleChoice
 from tangle_drake.planning.arm_motion import ArmMotion
 from tangle_drake.scenario.files import resolve_scenario
+from tangle_drake.selection.choice import TangleChoice
 from tangle_drake.station import build_station
 
 

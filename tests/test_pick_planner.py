@@ -14,7 +14,7 @@ from tangle_drake.pick.outcome import Outcome, summarize
 from tangle_drake.pick.planner import Mode, PickPlanner, PickSettings, rank_scored
 from tangle_drake.planning.motion import PickMotion, PlanningError, StirMotion
 from tangle_drake.planning.trajectory import chain, rest_to_rest
-from tangle_drake.tangle_cnn.selection import ScoredCandidate
+from tangle_drake.selection.rules import ScoredCandidate
 
 
 @dataclass(frozen=True, eq=False)

@@ -16,10 +16,11 @@ from cli_run import run_command
 
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.dataset import load_samples
-from tangle_drake.episode.methods import parse_method
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import shown_path
-from tangle_drake.pick.selection import resolve_tangle_choice
+from tangle_drake.selection.choice import resolve_tangle_choice
+from tangle_drake.selection.cnn_system import TangleCnnSystem
+from tangle_drake.selection.methods import parse_method
 from tangle_drake.tangle_cnn.card import classes_test_header, classes_test_row, validation_row
 from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
 from tangle_drake.tangle_cnn.evaluate import calibration_error, evaluate_model
@@ -31,7 +32,6 @@ from tangle_drake.tangle_cnn.synthetic import (
     synthetic_crop,
     write_synthetic_dataset,
 )
-from tangle_drake.tangle_cnn.system import TangleCnnSystem
 from tangle_drake.tangle_cnn.train import TrainSettings, train
 from tangle_drake.tangle_cnn.training_data import load_checked_samples
 

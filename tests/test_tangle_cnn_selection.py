@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.tangle_cnn.selection import (
+from tangle_drake.selection.rules import (
     MODEL_RULES,
     RANDOM_TOP_K,
     RULES,

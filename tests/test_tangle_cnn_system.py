@@ -13,12 +13,12 @@ from pydrake.systems.sensors import ImageDepth32F
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.crops import CropSpec
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.pick.selection import RuleSelector
+from tangle_drake.selection.cnn_system import TangleCnnSystem
+from tangle_drake.selection.methods import GraspSelector, MethodRun
+from tangle_drake.selection.rules import ScoredCandidate, rank
 from tangle_drake.tangle_cnn.model import TangleModel
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION
-from tangle_drake.tangle_cnn.selection import ScoredCandidate, rank
-from tangle_drake.tangle_cnn.system import TangleCnnSystem
 
 INTRINSICS = CameraIntrinsics.from_fov_y(80, 60, 45)
 
@@ -81,14 +81,14 @@ def test_scores_every_candidate_and_selects_by_the_rule(model, depth, rule):
     assert system.GetOutputPort("selected_grasp").Eval(context) == CANDIDATES[expected.order[0]]
 
 
-def test_random_draws_as_the_rule_selector_does_without_a_cnn(model, depth):
-    """The CNN system and the CNN-free ``RuleSelector`` draw the same candidate per seed (the
-    rule is ``selection.rank``'s in both), and the seed changes the draw."""
+def test_random_draws_as_the_grasp_selector_does_without_a_cnn(model, depth):
+    """The CNN system and the grasp selector without a CNN draw the same candidate per seed
+    (the rule is ``rules.rank``'s in both), and the seed changes the draw."""
     picks = []
     for seed in range(8):
         system, context = build(model, depth, CANDIDATES, "random", seed=seed)
         drawn = system.GetOutputPort("selected_grasp").Eval(context)
-        selector = RuleSelector("random", seed)
+        selector = GraspSelector([], MethodRun("random", seed))
         selector_context = selector.CreateDefaultContext()
         selector.GetInputPort("candidates").FixValue(selector_context, CANDIDATES)
         assert selector.GetOutputPort("selected_grasp").Eval(selector_context) == drawn

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from tangle_drake.crops import DEFAULT_CROP
-from tangle_drake.episode.methods import parse_method
 from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.parts.catalog import BUILTIN_PARTS
-from tangle_drake.pick.selection import TRAINED_DIR, resolve_tangle_choice, trained_model_path
+from tangle_drake.selection.choice import TRAINED_DIR, resolve_tangle_choice, trained_model_path
+from tangle_drake.selection.methods import parse_method
 from tangle_drake.tangle_cnn.card import validation_row
 from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION

@@ -22,7 +22,7 @@ from tangle_drake.episode.demo import DemoOptions, run_demo
 from tangle_drake.graspability.system import GraspabilitySystem
 from tangle_drake.pick.planner import PickPlanner
 from tangle_drake.scenario.files import resolve_scenario
-from tangle_drake.tangle_cnn.system import TangleCnnSystem
+from tangle_drake.selection.cnn_system import TangleCnnSystem
 
 
 def _count_calls(calls: collections.Counter, cls: type, name: str) -> None:

@@ -54,7 +54,7 @@ from pathlib import Path
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts.catalog import BUILTIN_PARTS
 from tangle_drake.paths import shown_path
-from tangle_drake.pick.selection import TRAINED_DIR, trained_model_path
+from tangle_drake.selection.choice import TRAINED_DIR, trained_model_path
 from tangle_drake.tangle_cnn.card import (
     TEST_HEADER,
     VALIDATION_HEADER,

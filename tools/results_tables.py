@@ -31,6 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from tangle_drake.scenario import Scenario, load_scenario
+from tangle_drake.selection.registry import markdown_table
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
@@ -167,7 +168,12 @@ def headline(page: Path) -> list[str]:
     return lines
 
 
-BLOCKS: dict[str, Callable[[Path], list[str]]] = {"headline": headline}
+def methods(page: Path) -> list[str]:
+    """The registered ways of choosing a grasp (``tangle_drake.selection.registry``)."""
+    return markdown_table()
+
+
+BLOCKS: dict[str, Callable[[Path], list[str]]] = {"headline": headline, "methods": methods}
 """What each generated block holds: its lines, made for the page it is on (links relative
 to that page)."""
 

@@ -37,7 +37,6 @@ from pydrake.systems.analysis import InitializeParams
 from pydrake.systems.framework import Context
 
 from tangle_drake.bench.clearing import clearing_diagram, tray_count
-from tangle_drake.episode.methods import Method, MethodRun
 from tangle_drake.episode.run import PickEpisode, RunEnd
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import diagrams_dir
@@ -45,6 +44,7 @@ from tangle_drake.pick.load_path import GRIPPER_BODY, LoadPathMonitor
 from tangle_drake.pick.planner import Mode
 from tangle_drake.pile import PileSettler
 from tangle_drake.scenario import PartCount, Scenario, load_scenario
+from tangle_drake.selection.methods import Method, MethodRun
 from tangle_drake.station import build_station
 from tangle_drake.station.perturb import ContactScaler
 from tangle_drake.stats import wilson

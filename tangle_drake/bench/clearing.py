@@ -22,7 +22,6 @@ from pydrake.systems.framework import Context
 
 from tangle_drake.bench.trials import BenchConfig, PartSpec, method_seed, part_scenario, pile_seed
 from tangle_drake.bin_model import inside_bin
-from tangle_drake.episode.methods import Method, MethodRun, selection_wiring
 from tangle_drake.episode.run import POLL, PickEpisode
 from tangle_drake.pick.diagram import (
     PickDiagram,
@@ -32,10 +31,11 @@ from tangle_drake.pick.diagram import (
 )
 from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import PickRecord
-from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import BinConfig, Scenario
+from tangle_drake.selection.choice import FALLBACK_RULE, TangleChoice
+from tangle_drake.selection.methods import Method, MethodRun, selection_wiring
 from tangle_drake.station import build_station
 
 SIM_TIME_PER_PART = 40.0

@@ -31,7 +31,6 @@ from tangle_drake.bench.trials import (
     part_scenario,
     pile_seed,
 )
-from tangle_drake.episode.methods import DEFAULT_METHODS, Method, file_digest, parse_method
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.parts.library import part_digest
@@ -41,12 +40,14 @@ from tangle_drake.pick.diagram import (
     default_graspability_params,
     weighing_warning,
 )
-from tangle_drake.pick.selection import model_part_notice
 from tangle_drake.pile import check_pile
 from tangle_drake.planning.motions import scenario_mode
 from tangle_drake.progress import Progress
 from tangle_drake.provenance import made_by
 from tangle_drake.scenario.files import ScenarioSource, scenario_source
+from tangle_drake.selection.choice import model_part_notice
+from tangle_drake.selection.methods import Method, file_digest, parse_method
+from tangle_drake.selection.registry import DEFAULT_METHODS
 from tangle_drake.station.perturb import PhysicsSpread
 from tangle_drake.workers import start_workers
 

@@ -19,11 +19,11 @@ from typing import Any
 import numpy as np
 
 from tangle_drake.bench.gallery import TILE_KEY, caption, failure_kind, timed_tile
-from tangle_drake.episode.methods import Method, MethodRun
 from tangle_drake.episode.single_pick import PickRig
 from tangle_drake.failures import FailureKind
 from tangle_drake.pick.outcome import Outcome, PickRecord
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
+from tangle_drake.selection.methods import Method, MethodRun
 from tangle_drake.station.perturb import PhysicsSpread, PickPhysics
 
 MODE_SCENARIOS = {"floating": "floating_gripper.yaml", "arm": "pick_demo.yaml"}

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument, scenario_from
 from tangle_drake.failures import FailureKind
+from tangle_drake.selection.registry import DEFAULT_METHODS, help_list
 from tangle_drake.workers import add_worker_arguments
 
 
@@ -22,17 +23,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "report.md, CSV and JSON tables with 95 % confidence intervals, and PNG "
                     "plots into --out; run the same command again to resume.")
     parser.add_argument("--methods", nargs="+", default=None, metavar="METHOD",
-                        help="random (among graspability's top 5), graspability, cnn, "
-                             "harmonic (the paper), success-cnn (the seed's success/failure "
-                             "baseline, trained/<part>.success.pt), success-harmonic (its "
-                             "P(success) with graspability), outcome (the pick-outcome model, "
-                             "trained/<part>.outcome.pt, with its P(one part) and "
-                             "graspability), emap, emap-harmonic, or "
-                             "model:PATH (your checkpoint, with its own rule), or RULE:PATH "
-                             "(a CNN rule with your checkpoint, e.g. success-cnn:M.outcome.pt"
-                             "); default: random graspability cnn harmonic success-cnn "
-                             "outcome (the paper's comparison), leaving out, with a notice, a "
-                             "CNN method whose part has no trained model")
+                        help=f"{help_list()}; default: {' '.join(DEFAULT_METHODS)} (the "
+                             "paper's comparison), leaving out, with a notice, a method whose "
+                             "part has no trained model")
     parser.add_argument("--parts", "--part", nargs="+", default=None, metavar="PART",
                         dest="parts",
                         help="built-in parts or mesh files (default: every built-in part)")

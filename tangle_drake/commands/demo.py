@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument, scenario_from
-from tangle_drake.tangle_cnn.selection import RULES
+from tangle_drake.selection.registry import RULES, help_list
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -29,9 +29,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_scenario_argument(parser)
     add_seed_argument(parser, None, help="pile seed (default: the scenario's pile.seed)")
     parser.add_argument("--rule", choices=RULES, default=None,
-                        help="selection rule (default: harmonic with a model, else "
-                             "graspability); emap and emap-harmonic add the topological "
-                             "entanglement map (Zhang et al. 2021)")
+                        help=f"selection rule (default: harmonic with a model, else "
+                             f"graspability): {help_list(RULES)}")
     parser.add_argument("--model", type=Path, default=None,
                         help="tangle CNN checkpoint (default: tangle_drake/trained/<part>.pt)")
     parser.add_argument("--meshcat", action="store_true",

@@ -33,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
 
     from tangle_drake.dataset import read_manifest
     from tangle_drake.errors import TangleDrakeError
-    from tangle_drake.pick.selection import resolve_tangle_choice, trained_model_path
+    from tangle_drake.selection.choice import resolve_tangle_choice, trained_model_path
     from tangle_drake.tangle_cnn.evaluate import evaluate_model
     from tangle_drake.tangle_cnn.metrics import few_samples_warning
     from tangle_drake.tangle_cnn.model import load_tangle_model

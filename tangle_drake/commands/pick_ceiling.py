@@ -91,11 +91,11 @@ def _choice(samples: dict, manifest: dict, directory: Path, part: str, model: st
             rule: str | None) -> RuleChoice:
     """``model``'s (a checkpoint, or a shipped objective's name) rule's first picks on the
     samples of ``directory``."""
-    from tangle_drake.pick.selection import trained_model_path
+    from tangle_drake.selection.choice import trained_model_path
+    from tangle_drake.selection.rules import EMAP_RULES, MODEL_RULES
     from tangle_drake.tangle_cnn.evaluate import check_crop  # imports torch
     from tangle_drake.tangle_cnn.model import load_tangle_model
     from tangle_drake.tangle_cnn.objectives import DEFAULT_RULES, check_serves
-    from tangle_drake.tangle_cnn.selection import EMAP_RULES, MODEL_RULES
     from tangle_drake.tangle_cnn.training_data import crop_spec
     from tangle_drake.tangle_data.ceiling import rule_choice
 

@@ -43,13 +43,13 @@ from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.pick_log import PickLog, pick_log_identity
 from tangle_drake.pick.pictures import PickPictures
 from tangle_drake.pick.planner import PickSettings
-from tangle_drake.pick.selection import TangleChoice, model_part_notice, resolve_tangle_choice
 from tangle_drake.pile import check_pile, settle_pile
 from tangle_drake.planning.motion import Motion
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario
 from tangle_drake.scenario.files import ScenarioSource, scenario_source
 from tangle_drake.scenario.hardware import IN_PROCESS_URL
+from tangle_drake.selection.choice import TangleChoice, model_part_notice, resolve_tangle_choice
 from tangle_drake.station import SimulatedStation, build_station, camera_model
 from tangle_drake.tangle_cnn.model import load_tangle_model
 

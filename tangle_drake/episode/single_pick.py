@@ -3,7 +3,7 @@ pick data of ``tangle-drake collect --label pick`` both run it, so the labels a 
 from are the outcomes the benchmark scores it by.
 
 A part's :class:`PickRig` holds a bare station to drop and settle piles in and a pick diagram
-(the real fingers, on the gantry or the Nextage) whose ``MethodSelector`` follows the method on
+(the real fingers, on the gantry or the Nextage) whose ``GraspSelector`` follows the method on
 its ``method`` input. Each pick restores a settled plant state into the diagram and runs it
 until its one pick is recorded. Until the robot reaches into the bin the pile's bodies are
 locked: at rest and untouched, they cost the contact solver nothing (the approach is a fifth
@@ -32,17 +32,17 @@ import numpy as np
 from pydrake.systems.framework import Context
 
 from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.episode.methods import Method, MethodRun, selection_wiring
 from tangle_drake.episode.run import SIM_TIME_PER_PICK, PickEpisode, RunEnd
 from tangle_drake.parts import load_part
 from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
 from tangle_drake.pick.outcome import Outcome, PickRecord, classify_lift
 from tangle_drake.pick.planner import Mode
-from tangle_drake.pick.selection import FALLBACK_RULE, TangleChoice
 from tangle_drake.pile import PileSettler, SettledPile
 from tangle_drake.pile_freeze import FREEZE_BEYOND_RADII, PileFreeze, parts_beyond
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import Scenario
+from tangle_drake.selection.choice import FALLBACK_RULE, TangleChoice
+from tangle_drake.selection.methods import Method, MethodRun, selection_wiring
 from tangle_drake.station import build_station, camera_model
 from tangle_drake.station.perturb import ContactScaler, PickPhysics
 

@@ -19,7 +19,7 @@ import numpy as np
 from tangle_drake.failures import FailureKind
 from tangle_drake.pick.outcome import PickRecord, Rejection
 from tangle_drake.planning.motion import Motion, PickMotion, PlanningError
-from tangle_drake.tangle_cnn.selection import ScoredCandidate
+from tangle_drake.selection.rules import ScoredCandidate
 
 
 @dataclass(frozen=True)
@@ -50,7 +50,7 @@ class RepeatRule:
 def rank_scored(scored: list[ScoredCandidate],
                 selected: Any = None) -> list[ScoredCandidate]:
     """``scored`` in the selection's order (``scored_candidates`` are best first,
-    :func:`~tangle_drake.tangle_cnn.selection.rank`), with ``selected`` at the front."""
+    :func:`~tangle_drake.selection.rules.rank`), with ``selected`` at the front."""
     if selected is None:
         return list(scored)
     key = (selected.u, selected.v, selected.angle_deg)

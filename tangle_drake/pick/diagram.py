@@ -1,8 +1,9 @@
-"""The pick diagram: station, graspability, tangle CNN, pick planner and (in simulation) the
-lift monitor, wired by port name so the same builder serves the hardware station.
+"""The pick diagram: station, graspability, grasp selection, pick planner and (in simulation)
+the lift monitor, wired by port name so the same builder serves the hardware station.
 
     camera.depth_image -> GraspabilitySystem -> candidates ----------------> PickPlanner
-                       \\-> TangleCnnSystem -> scored_candidates, selected_grasp -/
+                       \\-> [TangleCnnSystem ->] GraspSelector -> scored_candidates,
+                                                        selected_grasp -> PickPlanner
     nextage.state_measured, gripper.state_measured ------------------------> PickPlanner
     PickPlanner -> nextage.position, gripper.position -> station
     sim.body_poses -> LiftMonitor -> lifted_count -> PickPlanner   (simulation only)
@@ -23,7 +24,6 @@ from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 from tangle_drake.bin_model import inner_corners
 from tangle_drake.camera import CameraModel
 from tangle_drake.drivers.parallel_jaw import empty_grasp_width
-from tangle_drake.entanglement.system import add_emap_selection
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import FINGER_GRIP_SPAN_M, GraspabilityParams, bin_roi
 from tangle_drake.graspability.system import GraspabilitySystem
@@ -41,11 +41,11 @@ from tangle_drake.pick.payload import (
 )
 from tangle_drake.pick.planner import PickPlanner, PickSettings
 from tangle_drake.pick.recovery import RecoverySettings
-from tangle_drake.pick.selection import RuleSelector, TangleChoice
 from tangle_drake.planning.motion import Motion
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
+from tangle_drake.selection.choice import TangleChoice
+from tangle_drake.selection.methods import Method, MethodRun, selection_wiring
 from tangle_drake.station import SimulatedStation, build_station, camera_model
-from tangle_drake.tangle_cnn.selection import needs_emap
 
 WRIST = "wrist"
 """The force/torque sensor the closed loop weighs with (``force_torque_sensors.wrist``)."""
@@ -201,11 +201,11 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
                        selection: SelectionWiring | None = None) -> PickDiagram:
     """Wire the pick diagram around ``station`` (built from ``scenario`` if not given).
 
-    ``choice`` says whether a tangle CNN runs (and which rule selects); ``motion`` moves the
-    arm (``ArmMotion`` for the Nextage); ``params`` default to
-    :func:`default_graspability_params`; ``seed`` seeds the ``random`` rule; ``meshcat`` is
-    passed to a station built here. ``selection``, if given, replaces ``choice``'s CNN between
-    perception and the planner (the benchmark switches methods with it).
+    ``choice`` says which rule selects (and with which model, if any): a ``GraspSelector``
+    fixed to it; ``motion`` moves the arm (``ArmMotion`` for the Nextage); ``params`` default
+    to :func:`default_graspability_params`; ``seed`` seeds the ``random`` rule; ``meshcat`` is
+    passed to a station built here. ``selection``, if given, wires a selection of its own
+    between perception and the planner instead (the benchmark's switches methods).
     """
     station = station or build_station(scenario, meshcat)
     needed = [(motion.measured_port, True), ("gripper.state_measured", True),
@@ -232,31 +232,13 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
     if planner_settings.record_crop is not None or planner_settings.record_view:
         builder.Connect(depth, planner.GetInputPort("depth_image"))
     builder.Connect(graspability.GetOutputPort("candidates"), planner.GetInputPort("candidates"))
-    if selection is not None:
-        scored, selected = selection(builder, depth, graspability.GetOutputPort("candidates"))
-        builder.Connect(scored, planner.GetInputPort("scored_candidates"))
-        builder.Connect(selected, planner.GetInputPort("selected_grasp"))
-    elif needs_emap(choice.rule):
-        scored, selected = add_emap_selection(
-            builder, "entanglement_map", depth, graspability.GetOutputPort("candidates"),
-            camera.intrinsics, roi, choice.rule, choice.model)
-        builder.Connect(scored, planner.GetInputPort("scored_candidates"))
-        builder.Connect(selected, planner.GetInputPort("selected_grasp"))
-    elif choice.model is not None:
-        from tangle_drake.tangle_cnn.system import TangleCnnSystem  # imports torch
-
-        cnn = builder.AddNamedSystem(
-            "tangle_cnn", TangleCnnSystem(Path(choice.model), camera.intrinsics, choice.rule,
-                                          seed))
-        builder.Connect(depth, cnn.GetInputPort("depth_image"))
-        builder.Connect(graspability.GetOutputPort("candidates"), cnn.GetInputPort("candidates"))
-        for port in ("scored_candidates", "selected_grasp"):
-            builder.Connect(cnn.GetOutputPort(port), planner.GetInputPort(port))
-    else:
-        rule = builder.AddNamedSystem("selection", RuleSelector(choice.rule, seed))
-        builder.Connect(graspability.GetOutputPort("candidates"), rule.GetInputPort("candidates"))
-        for port in ("scored_candidates", "selected_grasp"):
-            builder.Connect(rule.GetOutputPort(port), planner.GetInputPort(port))
+    if selection is None:  # the choice's method, fixed
+        method = Method(choice.rule, choice.rule, None if choice.model is None
+                        else Path(choice.model))
+        selection = selection_wiring([method], None, scenario, MethodRun(choice.rule, seed))
+    scored, selected = selection(builder, depth, graspability.GetOutputPort("candidates"))
+    builder.Connect(scored, planner.GetInputPort("scored_candidates"))
+    builder.Connect(selected, planner.GetInputPort("selected_grasp"))
 
     for port in (motion.measured_port, "gripper.state_measured"):
         builder.Connect(station.GetOutputPort(port), planner.GetInputPort(port))

@@ -112,7 +112,7 @@ from tangle_drake.pick.outcome import (
 from tangle_drake.pick.payload import PayloadEstimate, PayloadPhase, PayloadRequest
 from tangle_drake.pick.recovery import Disposition
 from tangle_drake.planning.motion import Motion
-from tangle_drake.tangle_cnn.selection import ScoredCandidate
+from tangle_drake.selection.rules import ScoredCandidate
 
 __all__ = ["Mode", "PickPlanner", "PickSettings", "rank_scored"]
 

@@ -32,7 +32,6 @@ from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.crops import DEFAULT_CROP, CropSpec, extract_crop
 from tangle_drake.dataset import rows_to_arrays
 from tangle_drake.dataset.store import TaskResult
-from tangle_drake.episode.methods import Method, MethodRun
 from tangle_drake.episode.single_pick import PhysicalPick, PickRig
 from tangle_drake.errors import TangleDrakeError, check_seed
 from tangle_drake.failures import FailureKind
@@ -42,6 +41,7 @@ from tangle_drake.pick.outcome import Outcome
 from tangle_drake.pick.recovery import Verdict
 from tangle_drake.planning.motions import scenario_mode
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
+from tangle_drake.selection.methods import Method, MethodRun
 from tangle_drake.station.perturb import PhysicsSpread, PickPhysics
 from tangle_drake.tangle_data.seeds import depth_noise_rng, physics_rng, pile_seed
 

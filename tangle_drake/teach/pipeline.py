@@ -35,7 +35,7 @@ import trimesh
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.paths import shown_path
-from tangle_drake.pick.selection import trained_model_path
+from tangle_drake.selection.choice import trained_model_path
 from tangle_drake.tangle_cnn.train_settings import TRAIN_THREADS
 from tangle_drake.teach.check import (
     PartCheck,

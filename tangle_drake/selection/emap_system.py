@@ -34,7 +34,7 @@ from pydrake.systems.sensors import ImageDepth32F
 from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.entanglement.emap import EmapParams, EntanglementMap, entanglement_map
 from tangle_drake.errors import TangleDrakeError
-from tangle_drake.tangle_cnn.selection import (
+from tangle_drake.selection.rules import (
     EMAP_RULES,
     ScoredCandidate,
     needs_model,
@@ -115,7 +115,7 @@ def add_emap_selection(builder: DiagramBuilder, name: str, depth: OutputPort,
     builder.Connect(depth, emap.GetInputPort("depth_image"))
     builder.Connect(candidates, emap.GetInputPort("candidates"))
     if needs_model(rule):
-        from tangle_drake.tangle_cnn.system import TangleCnnSystem  # imports torch
+        from tangle_drake.selection.cnn_system import TangleCnnSystem  # imports torch
 
         cnn = builder.AddNamedSystem(f"{name} tangle_cnn",
                                      TangleCnnSystem(model, intrinsics, "harmonic"))

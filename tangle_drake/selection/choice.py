@@ -2,9 +2,8 @@
 
 Trained models ship as ``tangle_drake/trained/<part>.pt``. With one (or a ``--model`` file)
 the paper's ``harmonic`` rule is the default; without, picking falls back to the graspability
-index alone and says so, since a rule that needs the CNN cannot run without it. Rules without
-the CNN run in :class:`RuleSelector`; the rules themselves are :mod:`tangle_drake.tangle_cnn.
-selection`'s.
+index alone and says so, since a rule that needs the CNN cannot run without it. The
+pick diagram selects by the choice with :class:`~tangle_drake.selection.methods.GraspSelector`.
 """
 
 from __future__ import annotations
@@ -12,13 +11,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import Context, LeafSystem
-
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import load_part
 from tangle_drake.parts.library import PART_FILE_SUFFIX
 from tangle_drake.paths import shown_path
+from tangle_drake.selection.rules import check_rule, needs_model
 from tangle_drake.tangle_cnn.objectives import (
     DEFAULT_OBJECTIVE,
     DEFAULT_RULES,
@@ -26,7 +23,6 @@ from tangle_drake.tangle_cnn.objectives import (
     checkpoint_objective,
     rule_objective,
 )
-from tangle_drake.tangle_cnn.selection import check_rule, needs_model, rank_candidates
 
 TRAINED_DIR = Path(__file__).resolve().parent.parent / "trained"
 """Where the package's trained models live, one ``<part>.pt`` per part."""
@@ -115,32 +111,3 @@ def model_part_notice(model: Path, part: str) -> str | None:
     return (f"warning: the tangle model {shown_path(model)} was trained on part "
             f"{trained_on!r}, and the pile is of {name!r}: its P(not tangled) is not this "
             "part's")
-
-
-class RuleSelector(LeafSystem):
-    """A selection rule that needs no CNN (``graspability``, ``random``) as a Drake system:
-    ``candidates`` in; ``scored_candidates`` (best first) and ``selected_grasp`` out, as
-    ``TangleCnnSystem`` gives them, with P(not tangled) ``None``."""
-
-    def __init__(self, rule: str, seed: int = 0) -> None:
-        super().__init__()
-        if needs_model(rule):
-            raise TangleDrakeError(f"rule {rule!r} needs the tangle CNN (TangleCnnSystem)")
-        self._rule = rule
-        self._seed = seed
-        candidates = self.DeclareAbstractInputPort("candidates", AbstractValue.Make([]))
-        self.DeclareAbstractOutputPort("scored_candidates", lambda: AbstractValue.Make([]),
-                                       self._calc_scored, {candidates.ticket()})
-        self.DeclareAbstractOutputPort("selected_grasp", lambda: AbstractValue.Make(None),
-                                       self._calc_selected, {candidates.ticket()})
-
-    def _scored(self, context: Context) -> list:
-        return rank_candidates(self._rule, list(self.get_input_port().Eval(context)),
-                               seed=self._seed)
-
-    def _calc_scored(self, context: Context, value: AbstractValue) -> None:
-        value.set_value(self._scored(context))
-
-    def _calc_selected(self, context: Context, value: AbstractValue) -> None:
-        scored = self._scored(context)
-        value.set_value(scored[0].candidate if scored else None)

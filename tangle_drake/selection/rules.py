@@ -1,6 +1,7 @@
 """Which grasp candidate to pick: the paper's rule and the baselines, the one place for both.
 
-Rules (``RULES``), over the candidates of one image (graspability's top-k, best first):
+The rules (registered in :mod:`.registry`), over the candidates of one image (graspability's
+top-k, best first):
 
 - ``random``: one of the first :data:`RANDOM_TOP_K` candidates, drawn from the seed and the
   candidates' poses (the same draw however often it is asked for; a benchmark baseline that
@@ -9,8 +10,9 @@ Rules (``RULES``), over the candidates of one image (graspability's top-k, best 
 - ``graspability``: the highest graspability score (the method without the CNN);
 - ``cnn``: the highest P(not tangled);
 - ``success-cnn`` (the seed's second baseline, Matsumura et al. 2018): the highest P(success)
-  from a success/failure CNN trained on physical picks (:mod:`.objectives`); it arrives where
-  the others' P(not tangled) does (a pick-outcome model's P(one part) serves it too);
+  from a success/failure CNN trained on physical picks
+  (:mod:`tangle_drake.tangle_cnn.objectives`); it arrives where the others' P(not tangled)
+  does (a pick-outcome model's P(one part) serves it too);
 - ``success-harmonic`` (beyond the paper): the harmonic mean of the normalised graspability
   and P(exactly one part) from a success or pick-outcome model: the paper's rule with the
   physical gripper's outcomes in place of the tangle label;
@@ -43,14 +45,9 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.selection.registry import EMAP_RULES, MODEL_RULES, RULES
 from tangle_drake.tangle_cnn.objectives import rule_objective
 
-RULES = ("random", "graspability", "cnn", "harmonic", "emap", "emap-harmonic", "success-cnn",
-         "success-harmonic")
-MODEL_RULES = ("cnn", "harmonic", "emap-harmonic", "success-cnn", "success-harmonic")
-"""The rules that need a trained CNN's probability (which model: :mod:`.objectives`)."""
-EMAP_RULES = ("emap", "emap-harmonic")
-"""The rules that need each candidate's entanglement (the entanglement map)."""
 RANDOM_TOP_K = 5
 """``random`` draws among this many of graspability's best candidates."""
 

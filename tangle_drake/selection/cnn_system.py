@@ -31,9 +31,9 @@ from pydrake.systems.framework import Context, LeafSystem, ValueProducer
 from pydrake.systems.sensors import ImageDepth32F
 
 from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.selection.rules import ScoredCandidate, check_rule, rank_candidates
 from tangle_drake.tangle_cnn.model import TangleModel, load_tangle_model
 from tangle_drake.tangle_cnn.objectives import check_serves
-from tangle_drake.tangle_cnn.selection import ScoredCandidate, check_rule, rank_candidates
 
 WARM_UP_CANDIDATES = 16
 """Candidates the network is warmed up for: at least the pick diagram's graspability top-k

@@ -1,35 +1,14 @@
-"""The benchmark's methods: how each picks a candidate, and the system that switches them.
+"""The methods a benchmark compares, and the one system that selects a grasp by any of them.
 
-==================== =======================================================================
-method               the candidate tried first
-==================== =======================================================================
-``random``          one drawn uniformly among graspability's top 5 (seeded per trial): the
-                    baseline that knows nothing but where a grasp is possible
-``graspability``    the best graspability index (Domae et al. 2014), no CNN
-``cnn``             the highest P(not tangled) from the part's tangle CNN
-``harmonic``        the paper's harmonic mean of the two, with the part's tangle CNN
-``model:PATH``      the harmonic mean with the checkpoint at PATH (any part of the run); a
-                    success/failure checkpoint ranks by its P(success) instead
-``RULE:PATH``       a rule that reads a model, with the checkpoint at PATH (one it serves)
-``success-cnn``     the seed's second baseline (Matsumura et al. 2018): the highest P(success)
-                    from the part's success/failure CNN, ``trained/<part>.success.pt``
-``success-harmonic`` the harmonic mean of graspability and that P(success) (a pick-outcome
-                    model's P(one part) serves both)
-``outcome``         the part's pick-outcome model, ``trained/<part>.outcome.pt``, with the rule
-                    it picks with unless told (its P(one part) with graspability, as
-                    ``success-harmonic``)
-``emap``            Zhang et al. 2021: graspability re-ranked by low entanglement (the
-                    topological entanglement map, no training)
-``emap-harmonic``   the harmonic mean of graspability, P(not tangled) and 1 - entanglement
-==================== =======================================================================
+The methods are :mod:`.registry`'s; the rules' arithmetic, what ``random`` draws from and the
+order the planner tries candidates in are :mod:`.rules`'. A rule that reads a model uses the
+part's shipped model (``tangle_drake/trained/<part>.pt``, ``<part>.success.pt``, ...) unless a
+checkpoint is named. If the tried candidate cannot be reached the planner goes on down the
+method's order (graspability's after a random draw).
 
-The rules, what ``random`` draws from and the order the planner tries candidates in are
-:mod:`tangle_drake.tangle_cnn.selection`'s, the same as the demo's. ``cnn`` and ``harmonic``
-use the shipped model ``tangle_drake/trained/<part>.pt``. If the tried candidate cannot be
-reached the planner goes on down the method's order (graspability's after a random draw).
-One pick diagram serves every method: :class:`MethodSelector` sits between perception and the
-planner and follows the method named on its ``method`` input, so a trial restores one settled
-pile and runs each method on it in turn.
+:class:`GraspSelector` sits between perception and the planner in every pick diagram: the demo
+fixes its method, the benchmark switches it on its ``method`` input, so a trial restores one
+settled pile and runs each method on it in turn.
 """
 
 from __future__ import annotations
@@ -47,35 +26,31 @@ from tangle_drake.bin_model import inner_corners
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability.roi import bin_roi
 from tangle_drake.paths import shown_path
-from tangle_drake.pick.selection import default_rule, model_objective, trained_model_path
 from tangle_drake.scenario import Scenario
-from tangle_drake.station import camera_model
-from tangle_drake.station.perturb import offset_pose
-from tangle_drake.tangle_cnn.objectives import (
-    DEFAULT_RULES,
-    OUTCOME,
-    Objective,
-    check_serves,
-    rule_objective,
-)
-from tangle_drake.tangle_cnn.selection import (
+from tangle_drake.selection.choice import default_rule, model_objective, trained_model_path
+from tangle_drake.selection.emap_system import add_emap_selection
+from tangle_drake.selection.registry import (
+    METHOD_NAMES,
+    MODEL_PREFIX,
     MODEL_RULES,
     RULES,
+    SHIPPED_MODEL_METHODS,
+)
+from tangle_drake.selection.rules import (
     ScoredCandidate,
     needs_emap,
     needs_model,
     rank_candidates,
 )
-
-DEFAULT_METHODS = ("random", "graspability", "cnn", "harmonic", "success-cnn", "outcome")
-"""The methods a run compares unless told otherwise: the paper's comparison (graspability, the
-seed's success/failure CNN, its tangle CNN with the harmonic mean) with the pick-outcome model
-and two controls. Every rule is a method under its own name; the others (``emap``,
-``success-harmonic``) on request."""
-MODEL_PREFIX = "model:"
-SHIPPED_MODEL_METHODS = {OUTCOME.name: OUTCOME}
-"""Methods named for a shipped model other than their rule's first (``outcome``: the part's
-pick-outcome model, where ``success-harmonic`` reads its success/failure CNN)."""
+from tangle_drake.station import camera_model
+from tangle_drake.station.perturb import offset_pose
+from tangle_drake.tangle_cnn.objectives import (
+    DEFAULT_RULES,
+    Objective,
+    check_serves,
+    objective_named,
+    rule_objective,
+)
 
 
 @dataclass(frozen=True)
@@ -104,10 +79,13 @@ class Method:
         """Whether a system of its own scores the candidates (a CNN, the entanglement map)."""
         return needs_model(self.rule) or needs_emap(self.rule)
 
-    def model_for(self, part: str) -> Path:
+    def model_for(self, part: str | None) -> Path:
         """The checkpoint this method uses on ``part`` (which may not exist)."""
-        return self.model if self.model is not None else \
-            trained_model_path(part, self.objective.name)
+        if self.model is not None:
+            return self.model
+        if part is None:
+            raise TangleDrakeError(f"method {self.name!r} needs a model: name its checkpoint")
+        return trained_model_path(part, self.objective.name)
 
 
 def parse_method(text: str) -> Method:
@@ -126,12 +104,11 @@ def parse_method(text: str) -> Method:
         check_serves(prefix, model_objective(path), path)
         return Method(f"{prefix}:{shown_path(path)}", prefix, path.resolve())
     if text in SHIPPED_MODEL_METHODS:
-        objective = SHIPPED_MODEL_METHODS[text]
+        objective = objective_named(SHIPPED_MODEL_METHODS[text])
         return Method(text, DEFAULT_RULES[objective.name], shipped=objective)
     if text not in RULES:
         raise TangleDrakeError(f"unknown method {text!r}; choose from "
-                               f"{', '.join((*RULES, *SHIPPED_MODEL_METHODS))}, model:PATH or "
-                               "RULE:PATH")
+                               f"{', '.join(METHOD_NAMES)}, {MODEL_PREFIX}PATH or RULE:PATH")
     return Method(text, text)
 
 
@@ -141,7 +118,7 @@ def file_digest(path: Path) -> str:
 
 
 class MethodRun(NamedTuple):
-    """The value of :class:`MethodSelector`'s ``method`` input: which method, which seed."""
+    """The value of :class:`GraspSelector`'s ``method`` input: which method, which seed."""
 
     name: str
     seed: int
@@ -154,20 +131,22 @@ class MethodRun(NamedTuple):
     ``pose`` is moved by it, what the method saw (``u``, ``v``, ``angle_deg``) is not."""
 
 
-class MethodSelector(LeafSystem):
-    """Orders the candidates as the method on the ``method`` input says.
+class GraspSelector(LeafSystem):
+    """Orders the candidates as a method says: ``fixed`` (the demo's), or else the method on
+    the ``method`` input (a :class:`MethodRun`; the benchmark switches it run by run).
 
-    Inputs: ``candidates`` (graspability's, best first), ``method`` (a :class:`MethodRun`),
-    and for each CNN method ``{name}.scored_candidates`` and ``{name}.selected_grasp`` (from
-    its ``TangleCnnSystem``). Outputs ``scored_candidates`` and ``selected_grasp`` as a
-    ``TangleCnnSystem`` has them; only the active method's inputs are evaluated, so the CNN
-    runs for the CNN methods only.
+    Inputs: ``candidates`` (graspability's, best first), ``method`` (unless ``fixed``), and
+    for each method scored by a system of its own (a CNN, the entanglement map)
+    ``{name}.scored_candidates`` and ``{name}.selected_grasp``. Outputs ``scored_candidates``
+    (best first) and ``selected_grasp``; only the active method's inputs are evaluated, so a
+    CNN runs for its own method only.
     """
 
-    def __init__(self, scored_outside: Sequence[str]) -> None:
+    def __init__(self, scored_outside: Sequence[str], fixed: MethodRun | None = None) -> None:
         super().__init__()
+        self._fixed = fixed
         self._candidates = self.DeclareAbstractInputPort("candidates", AbstractValue.Make([]))
-        self._method = self.DeclareAbstractInputPort(
+        self._method = None if fixed is not None else self.DeclareAbstractInputPort(
             "method", AbstractValue.Make(MethodRun("graspability", 0)))
         self._cnn = {name: (self.DeclareAbstractInputPort(f"{name}.scored_candidates",
                                                           AbstractValue.Make([])),
@@ -179,11 +158,14 @@ class MethodSelector(LeafSystem):
         self.DeclareAbstractOutputPort("selected_grasp", lambda: AbstractValue.Make(None),
                                        self._calc_selected)
 
+    def _run(self, context: Context) -> MethodRun:
+        return self._fixed if self._method is None else self._method.Eval(context)
+
     def _calc_scored(self, context: Context, value: AbstractValue) -> None:
         value.set_value(self._scored(context))
 
     def _calc_selected(self, context: Context, value: AbstractValue) -> None:
-        method = self._method.Eval(context)
+        method = self._run(context)
         if method.only is None and method.offset is None and method.name in self._cnn:
             value.set_value(self._cnn[method.name][1].Eval(context))
         else:
@@ -192,7 +174,7 @@ class MethodSelector(LeafSystem):
 
     def _scored(self, context: Context) -> list:
         """The active method's candidates, best first, each moved by the method's offset."""
-        method = self._method.Eval(context)
+        method = self._run(context)
         if method.only is None and method.name in self._cnn:
             scored = list(self._cnn[method.name][0].Eval(context))
         else:
@@ -215,11 +197,14 @@ class MethodSelector(LeafSystem):
         return [ScoredCandidate(candidate, None, float(candidate.score))]
 
 
-def selection_wiring(methods: Sequence[Method], part: str, scenario: Scenario):
+def selection_wiring(methods: Sequence[Method], part: str | None, scenario: Scenario,
+                     fixed: MethodRun | None = None):
     """A ``build_pick_diagram`` selection: a ``TangleCnnSystem`` per CNN method and an
     ``EntanglementMapSystem`` per ``emap`` method (over the bin's region of ``scenario``'s
-    camera; models loaded once each) into a :class:`MethodSelector`, whose ``method`` input
-    is exported as ``method``."""
+    camera; models loaded once each) into a :class:`GraspSelector`. With ``fixed`` it selects
+    by that method; else its ``method`` input is exported as ``method``. ``part`` finds the
+    shipped models of methods given none (``None``: every method that reads a model names
+    its checkpoint)."""
     camera = camera_model(scenario)
     intrinsics = camera.intrinsics
     roi = bin_roi(camera, inner_corners(scenario.bin))
@@ -227,10 +212,11 @@ def selection_wiring(methods: Sequence[Method], part: str, scenario: Scenario):
     def wire(builder: DiagramBuilder, depth: OutputPort,
              candidates: OutputPort) -> tuple[OutputPort, OutputPort]:
         outside = [m for m in methods if m.scored_outside]
-        selector = builder.AddNamedSystem("method_selector",
-                                          MethodSelector([m.name for m in outside]))
+        selector = builder.AddNamedSystem("grasp_selector",
+                                          GraspSelector([m.name for m in outside], fixed))
         builder.Connect(candidates, selector.GetInputPort("candidates"))
-        builder.ExportInput(selector.GetInputPort("method"), "method")
+        if fixed is None:
+            builder.ExportInput(selector.GetInputPort("method"), "method")
         models: dict[Path, Any] = {}
         for method in outside:
             model = None
@@ -240,12 +226,10 @@ def selection_wiring(methods: Sequence[Method], part: str, scenario: Scenario):
                 path = method.model_for(part)
                 model = models.setdefault(path, load_tangle_model(path))
             if needs_emap(method.rule):
-                from tangle_drake.entanglement.system import add_emap_selection
-
                 ports = add_emap_selection(builder, f"entanglement_map ({method.name})", depth,
                                            candidates, intrinsics, roi, method.rule, model)
             else:
-                from tangle_drake.tangle_cnn.system import TangleCnnSystem
+                from tangle_drake.selection.cnn_system import TangleCnnSystem  # imports torch
 
                 cnn = builder.AddNamedSystem(f"tangle_cnn ({method.name})",
                                              TangleCnnSystem(model, intrinsics, method.rule))
