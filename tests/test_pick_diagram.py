@@ -1,7 +1,14 @@
 """The pick diagram's wiring: the same builder serves the simulated and the hardware station."""
 
 from tangle_drake.graspability import GraspabilityParams
-from tangle_drake.pick.diagram import build_pick_diagram, default_graspability_params
+from tangle_drake.pick.diagram import (
+    build_pick_diagram,
+    closed_loop_settings,
+    default_graspability_params,
+)
+from tangle_drake.pick.load_path import LoadPathMonitor
+from tangle_drake.pick.outcome import LiftMonitor, TrayMonitor
+from tangle_drake.pick.truth import PickTruth
 from tangle_drake.planning.arm_motion import ArmMotion
 from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.selection.choice import TangleChoice
@@ -13,9 +20,42 @@ def test_the_pick_diagram_wires_to_the_hardware_station_without_the_monitor():
     station = build_station(scenario, hardware=True)  # in-process LCM (memq://)
     pick = build_pick_diagram(scenario, TangleChoice(None, "graspability"),
                               ArmMotion(scenario.bin), station=station)
-    assert pick.monitor is None
-    assert not pick.planner.GetInputPort("lifted_count").HasValue(
-        pick.planner.GetMyContextFromRoot(pick.diagram.CreateDefaultContext()))
+    assert pick.monitor is None and pick.truth is None
+    assert not pick.diagram.HasOutputPort("truth")
+
+
+TRUTH = (LiftMonitor, LoadPathMonitor, TrayMonitor, PickTruth)
+
+
+def upstream(diagram, system) -> list[tuple[object, str]]:
+    """Every (system, output port name) that feeds ``system``, directly or through others,
+    stopping at the station (whose ports are what a real cell has, or ``sim.*``)."""
+    sources = {}
+    for (dest, _), (source, port) in diagram.connection_map().items():
+        sources.setdefault(dest, []).append((source, source.get_output_port(port).get_name()))
+    found, todo, seen = [], [system], set()
+    while todo:
+        current = todo.pop()
+        for source, name in sources.get(current, []):
+            found.append((source, name))
+            if source.get_name() != "station" and id(source) not in seen:
+                seen.add(id(source))
+                todo.append(source)
+    return found
+
+
+def test_no_planner_input_is_fed_by_the_simulations_truth():
+    """Controllers never see the simulation's truth: nothing upstream of the planner is a
+    ``sim.*`` port or a truth monitor, while the monitors are there beside it."""
+    scenario = resolve_scenario(None)
+    pick = build_pick_diagram(scenario, TangleChoice(None, "graspability"),
+                              ArmMotion(scenario.bin), settings=closed_loop_settings(scenario))
+    feeding = upstream(pick.diagram, pick.planner)
+    assert any(name == "camera.depth_image" for _, name in feeding)  # it does see the camera
+    assert not [name for source, name in feeding if isinstance(source, TRUTH)
+                or name.startswith("sim.")]
+    assert pick.truth is not None and pick.monitor is not None
+    assert any(isinstance(source, TRUTH) for source, _ in upstream(pick.diagram, pick.truth))
 
 
 def test_default_graspability_params_fit_the_wire_and_the_palm():

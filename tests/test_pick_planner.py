@@ -12,6 +12,7 @@ from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 from tangle_drake.failures import FailureKind
 from tangle_drake.pick.outcome import Outcome, summarize
 from tangle_drake.pick.planner import Mode, PickPlanner, PickSettings, rank_scored
+from tangle_drake.pick.truth import PickTruth, with_truth
 from tangle_drake.planning.motion import PickMotion, PlanningError, StirMotion
 from tangle_drake.planning.trajectory import chain, rest_to_rest
 from tangle_drake.selection.rules import ScoredCandidate
@@ -142,9 +143,14 @@ def run(candidates, motion=None, width=0.003, lifted=None, scored=None, picks=2,
     builder.Connect(measured.get_output_port(), planner.GetInputPort("arm.state_measured"))
     gripper = builder.AddSystem(ConstantVectorSource(np.array([width, 0.0])))
     builder.Connect(gripper.get_output_port(), planner.GetInputPort("gripper.state_measured"))
-    if lifted is not None:
-        count = builder.AddSystem(ConstantVectorSource(np.array([float(lifted)])))
-        builder.Connect(count.get_output_port(), planner.GetInputPort("lifted_count"))
+    truth = None
+    if lifted is not None:  # the simulation's truth, beside the planner as the diagram has it
+        truth = builder.AddSystem(PickTruth(planner.settings.update_period))
+        for port, value in (("lifted_count", [lifted]), ("held_count", [lifted, 0])):
+            count = builder.AddSystem(ConstantVectorSource(np.array(value, dtype=float)))
+            builder.Connect(count.get_output_port(), truth.GetInputPort(port))
+        for port in ("current_pick", "picks"):
+            builder.Connect(planner.GetOutputPort(port), truth.GetInputPort(port))
     if fault is not None:
         window = builder.AddSystem(FaultWindow(*fault))
         builder.Connect(window.get_output_port(), planner.GetInputPort("safety.fault"))
@@ -166,7 +172,12 @@ def run(candidates, motion=None, width=0.003, lifted=None, scored=None, picks=2,
             widths.setdefault(mode, planner.GetOutputPort("gripper.position").Eval(context)[0])
         if mode is Mode.DONE:
             break
-    return planner.GetOutputPort("picks").Eval(context), modes, widths, source
+    records = planner.GetOutputPort("picks").Eval(context)
+    if truth is not None:
+        found = truth.GetOutputPort("truth").Eval(truth.GetMyContextFromRoot(
+            simulator.get_context()))
+        records = [with_truth(r, found, planner.settings.empty_width) for r in records]
+    return records, modes, widths, source
 
 
 PICK_MODES = [Mode.SETTLE, Mode.PERCEIVE, Mode.APPROACH, Mode.DESCEND, Mode.CLOSE, Mode.LIFT,

@@ -20,6 +20,7 @@ from pydrake.systems.framework import Context
 from tangle_drake.pick.diagram import PickDiagram
 from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.pick.planner import Mode
+from tangle_drake.pick.truth import with_truth
 
 POLL = 0.5
 """Simulated seconds between looks at the planner, s (picks are reported as they end)."""
@@ -77,6 +78,16 @@ def run_picks(clock: Clock, pick: PickDiagram, time_limit: float, *,
     context = clock.get_context()
     mode_port = pick.diagram.GetOutputPort("mode")
     picks_port = pick.diagram.GetOutputPort("picks")
+
+    def records() -> list[PickRecord]:
+        """The planner's records; in simulation with what truly came up at each judgement."""
+        found = list(picks_port.Eval(context))
+        if pick.truth is None:
+            return found
+        truth = pick.diagram.GetOutputPort("truth").Eval(context)
+        empty_width = pick.planner.settings.empty_width
+        return [with_truth(record, truth, empty_width) for record in found]
+
     limit = context.get_time() + time_limit
     reported = 0
     end, message = RunEnd.DONE, None
@@ -94,11 +105,11 @@ def run_picks(clock: Clock, pick: PickDiagram, time_limit: float, *,
             break
         clock.AdvanceTo(context.get_time() + (POLL if step is None else step(mode)))
         if on_pick is not None:
-            records = picks_port.Eval(context)
-            for record in records[reported:]:
+            done = records()
+            for record in done[reported:]:
                 on_pick(record)
-            reported = len(records)
-    return PickRun(list(picks_port.Eval(context)), end, context.get_time(), message)
+            reported = len(done)
+    return PickRun(records(), end, context.get_time(), message)
 
 
 class PickEpisode:

@@ -24,6 +24,7 @@ from tangle_drake.pick.recovery import (
     judge,
 )
 from tangle_drake.pick.stir import looks_empty, stir_line, stir_poses
+from tangle_drake.pick.truth import DECIDED
 from tangle_drake.planning.motion import PlanningError
 from tangle_drake.planning.trajectory import chain
 
@@ -101,21 +102,19 @@ class ClosedLoop:
 
     def _came_up(self, context: Context, record: PickRecord, verdict: Verdict,
                  estimate: PayloadEstimate | None) -> PickRecord:
-        """``record`` with what the first look at the load said came up (and, in simulation,
-        what did)."""
+        """``record`` with what the first look at the load said came up: the weighing is all
+        a robot has (in simulation the episode adds what did, taken at this instant)."""
         record = self._check(context, record)
-        if record.lifted is None:  # hardware: the weighing is all there is
-            record = replace(record, outcome={Verdict.NONE: Outcome.NONE,
-                                              Verdict.ONE: Outcome.ONE,
-                                              Verdict.SEVERAL: Outcome.SEVERAL}.get(
-                                                  verdict, Outcome.HELD))
-        return replace(record, estimate=estimate, verdict=verdict)
+        outcome = {Verdict.NONE: Outcome.NONE, Verdict.ONE: Outcome.ONE,
+                   Verdict.SEVERAL: Outcome.SEVERAL}.get(verdict, Outcome.HELD)
+        return replace(record, outcome=outcome, estimate=estimate, verdict=verdict)
 
     def _decided(self, context: Context, record: PickRecord,
                  disposition: Disposition) -> PickRecord:
-        held = self._held_now(context)
+        """``record`` with where the load goes, and the instant it was decided (where the
+        simulation's count of what the gripper held is taken)."""
         return replace(record, disposition=disposition,
-                       held_decided=None if held is None else held[0])
+                       truth_at=(*record.truth_at, (DECIDED, context.get_time())))
 
     def _closed_on_nothing(self, context: Context, s: PlannerState, t: float) -> PlannerState:
         """During the lift: fingers closed past ``empty_width`` hold nothing (the part slid

@@ -6,8 +6,9 @@ the lift monitor, wired by port name so the same builder serves the hardware sta
                                                         selected_grasp -> PickPlanner
     nextage.state_measured, gripper.state_measured ------------------------> PickPlanner
     PickPlanner -> nextage.position, gripper.position -> station
-    sim.body_poses -> LiftMonitor -> lifted_count -> PickPlanner   (simulation only)
-    sim.contact_results -> LoadPathMonitor -> held_count -> PickPlanner   (simulation only)
+    sim.body_poses -> LiftMonitor, sim.contact_results -> LoadPathMonitor,
+        PickPlanner's records -> PickTruth -> truth   (simulation only: beside the planner,
+                                                        never into it)
     safety.fault ----------------------------------------------> PickPlanner   (hardware only)
 """
 
@@ -41,6 +42,7 @@ from tangle_drake.pick.payload import (
 )
 from tangle_drake.pick.planner import PickPlanner, PickSettings
 from tangle_drake.pick.recovery import RecoverySettings
+from tangle_drake.pick.truth import PickTruth
 from tangle_drake.planning.motion import Motion
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
 from tangle_drake.selection.choice import TangleChoice
@@ -70,6 +72,8 @@ class PickDiagram:
     """Simulation only, with a tray in the scenario: what lies in it."""
     payload: PayloadEstimator | None = None
     """Closed loop: the estimator that weighs each lift."""
+    truth: PickTruth | None = None
+    """Simulation only: what each pick truly brought up (the diagram's ``truth`` output)."""
 
 
 def palm_margin_px(camera: CameraModel, bin_config: BinConfig,
@@ -259,20 +263,22 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
         builder.Connect(depth, contents.GetInputPort("depth_image"))
         builder.Connect(contents.GetOutputPort("bin_contents"),
                         planner.GetInputPort("bin_contents"))
-    monitor = tray = None
+    monitor = tray = truth = None
     if isinstance(station, SimulatedStation):
         poses = station.GetOutputPort("sim.body_poses")
         monitor = builder.AddNamedSystem("lift_monitor (sim only)",
                                          LiftMonitor(station.plant, scenario.bin))
         builder.Connect(poses, monitor.GetInputPort("body_poses"))
-        builder.Connect(monitor.GetOutputPort("lifted_count"),
-                        planner.GetInputPort("lifted_count"))
         load_path = builder.AddNamedSystem("load_path_monitor (sim only)",
                                            LoadPathMonitor(station.plant))
         builder.Connect(station.GetOutputPort("sim.contact_results"),
                         load_path.GetInputPort("contact_results"))
-        builder.Connect(load_path.GetOutputPort("held_count"),
-                        planner.GetInputPort("held_count"))
+        truth = builder.AddNamedSystem("pick_truth (sim only)",
+                                       PickTruth(planner_settings.update_period))
+        for source, port in ((monitor, "lifted_count"), (load_path, "held_count"),
+                             (planner, "current_pick"), (planner, "picks")):
+            builder.Connect(source.GetOutputPort(port), truth.GetInputPort(port))
+        builder.ExportOutput(truth.GetOutputPort("truth"), "truth")
         if scenario.tray is not None:
             tray = builder.AddNamedSystem("tray_monitor (sim only)",
                                           TrayMonitor(station.plant, scenario.tray))
@@ -282,7 +288,7 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
     builder.ExportOutput(planner.GetOutputPort("current_pick"), "current_pick")
     diagram = builder.Build()
     diagram.set_name("pick_demo")
-    return PickDiagram(diagram, station, planner, monitor, tray, payload)
+    return PickDiagram(diagram, station, planner, monitor, tray, payload, truth)
 
 
 def _add_payload(builder: DiagramBuilder, scenario: Scenario, station: Diagram,

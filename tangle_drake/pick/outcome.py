@@ -95,16 +95,20 @@ class PickRecord:
     rejected: list[Rejection] = field(default_factory=list)
     width: float | None = None
     """Gripper opening measured after the lift, m."""
+    truth_at: tuple[tuple[str, float], ...] = ()
+    """When the planner judged the pick, by kind (:mod:`tangle_drake.pick.truth`): where the
+    simulation's truth is taken, never by the planner itself."""
     lifted: int | None = None
-    """Parts the simulation saw brought up (``None`` without a monitor)."""
+    """Parts the simulation saw brought up when the planner looked (the episode fills it in
+    from :class:`~tangle_drake.pick.truth.PickTruth`; ``None`` on hardware)."""
     held: int | None = None
-    """Parts held up by the gripper through contacts when ``lifted`` was counted
-    (:class:`~tangle_drake.pick.load_path.LoadPathMonitor`; ``None`` without one)."""
+    """Parts held up by the gripper through contacts then
+    (:class:`~tangle_drake.pick.load_path.LoadPathMonitor`; ``None`` on hardware)."""
     resting: int | None = None
     """Of the ``held`` parts, how many still touched the pile or the bin then."""
     held_decided: int | None = None
     """Parts held up through contacts at the weighing that decided where the load went (the
-    last one: after a shake it can differ from ``held``); ``None`` without a monitor."""
+    last one: after a shake it can differ from ``held``); ``None`` on hardware."""
     perception_s: float = 0.0
     """Wall time of rendering the depth image and the graspability index, s."""
     cnn_s: float = 0.0

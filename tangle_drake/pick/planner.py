@@ -16,27 +16,28 @@ Closed loop (``recovery`` set; :mod:`.recovery` says what follows a weighing)::
 
 SETTLE waits for the pile to come to rest (after the start, or the last pick). PERCEIVE reads
 the perception inputs (so the camera renders, the graspability index and the CNN run, only
-then), takes the candidates in the selection's order and asks the ``Motion`` to plan each
-until one can be done (:mod:`.choose`); the others are recorded as rejected. The moving modes
-play the planned trajectories; CLOSE waits for the arm to settle, then for the fingers,
-RELEASE for the fingers. Open loop, CHECK holds the part up and classifies the pick: fingers
-closed past ``empty_width`` hold nothing (all a robot can tell), else the ``lifted_count``
-input, where connected, says one or several. Closed loop, TARE has the wrist sensor tared at
-the pre-grasp and WEIGH has the load weighed at the top of the lift (``payload.request`` to
-the :class:`~tangle_drake.pick.payload.PayloadEstimator`, ``payload`` back); one part is
-delivered to the tray, nothing is left for a fresh look, several are shaken and, if that does
-not help, put back on the pile: lowered slowly until ``wrist.force_torque`` shows the load
-resting on the pile, released, weighed again for a part hooked on a finger. Fingers that
-close on nothing while the lift still retraces the descent (the part slid out of the grip as
-it came up) back out the way the pick came, with no weighing. A grasp that came up empty is
-not tried again while the pile there is unchanged. Open loop, after
-``max_picks`` picks the planner is DONE; closed loop, after ``max_picks`` deliveries, or
-``recovery.max_attempts`` grasps in a row without one (it gives up). When nothing can be
-picked (no candidate, none reachable: the next look would see the same pile) it is DONE too,
-and holds still; closed loop, with the ``bin_contents`` input connected, it first stirs the
-bin (STIR: the closed fingers sweep through what is left, :mod:`.stir`) if the bin does not
-look empty, and so it does after ``recovery.max_attempts`` grasps in a row without a delivery;
-after ``recovery.max_stirs`` stirs without a delivery it gives up.
+then), takes the candidates in the selection's order and asks the ``Motion`` to plan each until
+one can be done (:mod:`.choose`); the others are recorded as rejected. The moving modes play
+the planned trajectories; CLOSE waits for the arm to settle, then for the fingers, RELEASE for
+the fingers. Open loop, CHECK holds the part up and classifies the pick as a robot can: fingers
+closed past ``empty_width`` hold nothing, else they hold something. The planner never reads the
+simulation's truth; its records say when they judged a pick, and in simulation the episode adds
+what truly came up then (:mod:`.truth`). Closed loop, TARE has the wrist sensor tared at the
+pre-grasp and WEIGH has the load weighed at the top of the lift (``payload.request`` to the
+:class:`~tangle_drake.pick.payload.PayloadEstimator`, ``payload`` back); one part is delivered
+to the tray, nothing is left for a fresh look, several are shaken and, if that does not help,
+put back on the pile: lowered slowly until ``wrist.force_torque`` shows the load resting on the
+pile, released, weighed again for a part hooked on a finger. Fingers that close on nothing
+while the lift still retraces the descent (the part slid out of the grip as it came up) back
+out the way the pick came, with no weighing. A grasp that came up empty is not tried again
+while the pile there is unchanged. Open loop, after ``max_picks`` picks the planner is DONE;
+closed loop, after ``max_picks`` deliveries, or ``recovery.max_attempts`` grasps in a row
+without one (it gives up). When nothing can be picked (no candidate, none reachable: the next
+look would see the same pile) it is DONE too, and holds still; closed loop, with the
+``bin_contents`` input connected, it first stirs the bin (STIR: the closed fingers sweep
+through what is left, :mod:`.stir`) if the bin does not look empty, and so it does after
+``recovery.max_attempts`` grasps in a row without a delivery; after ``recovery.max_stirs``
+stirs without a delivery it gives up.
 
 On hardware the station's ``safety.fault`` may stop the robot at any time (stale status, a
 command past a limit): the planner records the pick in progress as failed, STOPPED, and holds
@@ -57,11 +58,6 @@ port                         dir    value
                                     planner tries them in that order
 ``selected_grasp``           in     optional, with ``scored_candidates``: the rule's choice,
                                     tried first
-``lifted_count``             in     optional, simulation: parts brought up (``LiftMonitor``),
-                                    recorded (and, open loop, judged by)
-``held_count``               in     optional, simulation: parts held up through contacts,
-                                    and of those resting on the pile (``LoadPathMonitor``),
-                                    recorded
 ``payload``                  in     closed loop: the ``PayloadEstimator``'s estimate
 ``wrist.force_torque``       in     closed loop: the wrist sensor (the put-back's force limit)
 ``safety.fault``             in     optional, hardware: 1 after the station's safety stop
@@ -111,6 +107,7 @@ from tangle_drake.pick.outcome import (
 )
 from tangle_drake.pick.payload import PayloadEstimate, PayloadPhase, PayloadRequest
 from tangle_drake.pick.recovery import Disposition
+from tangle_drake.pick.truth import CHECK
 from tangle_drake.planning.motion import Motion
 from tangle_drake.selection.rules import ScoredCandidate
 
@@ -144,8 +141,6 @@ class PickPlanner(ClosedLoop, LeafSystem):
                                                      AbstractValue.Make([]))
         self._selected = self.DeclareAbstractInputPort("selected_grasp",
                                                        AbstractValue.Make(None))
-        self._lifted = self.DeclareVectorInputPort("lifted_count", 1)
-        self._held = self.DeclareVectorInputPort("held_count", 2)
         self._payload = self.DeclareAbstractInputPort("payload",
                                                       AbstractValue.Make(PayloadEstimate()))
         self._wrench = self.DeclareVectorInputPort("wrist.force_torque", 6)
@@ -177,6 +172,10 @@ class PickPlanner(ClosedLoop, LeafSystem):
         self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self._settings.update_period, 0.0,
                                                     self._update)
+
+    @property
+    def settings(self) -> PickSettings:
+        return self._settings
 
     # --- outputs -----------------------------------------------------------------------------
 
@@ -406,21 +405,11 @@ class PickPlanner(ClosedLoop, LeafSystem):
         return EmptyGrasp(record.candidate.pose, float(record.candidate.depth_m))
 
     def _check(self, context: Context, record: PickRecord) -> PickRecord:
-        """Classify the pick at the top of the lift: the fingers' opening first, then the
-        simulation's count where it is connected."""
+        """Classify the pick at the top of the lift as a robot can: fingers closed past
+        ``empty_width`` hold nothing, else they hold something (open loop nothing tells how
+        much). The record marks the instant, where the simulation's truth is taken."""
         width = float(self._gripper.Eval(context)[0])
-        lifted = round(self._lifted.Eval(context)[0]) if self._lifted.HasValue(
-            context) else None
-        outcome = classify_lift(width, lifted, self._settings.empty_width)
-        held, resting = self._held_now(context) or (None, None)
-        return replace(record, outcome=outcome, width=width, lifted=lifted, held=held,
-                       resting=resting)
-
-    def _held_now(self, context: Context) -> tuple[int, int] | None:
-        """The simulation's parts held up by the gripper, and of those resting on the pile;
-        ``None`` where no monitor is connected (hardware)."""
-        if not self._held.HasValue(context):
-            return None
-        held, resting = (round(n) for n in self._held.Eval(context))
-        return held, resting
+        outcome = classify_lift(width, None, self._settings.empty_width)
+        return replace(record, outcome=outcome, width=width,
+                       truth_at=(*record.truth_at, (CHECK, context.get_time())))
 
