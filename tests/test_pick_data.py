@@ -85,7 +85,7 @@ def test_an_interrupted_collection_resumes_to_the_same_picks(uninterrupted, tmp_
 
 
 def test_the_fast_pick_ends_an_empty_close_there_with_the_full_picks_outcome():
-    from tangle_drake.episode.single_pick import PickRig
+    from tangle_drake.episode.episode import Episode
     from tangle_drake.paths import diagrams_dir
     from tangle_drake.pick.outcome import Outcome
     from tangle_drake.selection.methods import Method
@@ -94,7 +94,8 @@ def test_the_fast_pick_ends_an_empty_close_there_with_the_full_picks_outcome():
     settings = PickDataSettings(part="e_shape", parts_per_pile=4, physics=None)
     scenario = pick_data_scenario((diagrams_dir() / PICK_SCENARIO).read_text(), settings)
     methods = [Method("graspability", "graspability")]
-    full, fast = (PickRig(scenario, methods, "e_shape", True, fast=f) for f in (False, True))
+    full, fast = (Episode.single_pick(scenario, methods, "e_shape", True, fast=f)
+                  for f in (False, True))
     settled = full.settle(9)  # rank 0 closes on nothing, rank 1 brings up one E
     for rank, outcome in ((0, Outcome.NONE), (1, Outcome.ONE)):
         run = MethodRun("graspability", 0, only=rank)

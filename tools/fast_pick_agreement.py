@@ -4,7 +4,7 @@ For each pile (the collection's pile seeds, not the benchmark's) and each of gra
 first ``--top-k`` candidates, picks three times from the same settled pile under the model's
 physics: the full pick (the benchmark's), the same pick with the grasp moved 0.1 mm (the
 simulator's own re-run agreement: chaotic contact makes a pick's outcome a draw), and the fast
-pick of ``collect --label pick`` (:class:`~tangle_drake.episode.single_pick.PickRig`,
+pick of ``collect --label pick`` (:meth:`~tangle_drake.episode.episode.Episode.single_pick`,
 ``fast``). Prints per-pick agreement of each with the full pick, the outcome rates of both with
 95 % intervals, and picks per minute of each (wall). One JSON line per pile in ``--out``: run
 the same command again to resume.
@@ -21,7 +21,7 @@ import time
 from collections import Counter
 from pathlib import Path
 
-from tangle_drake.episode.single_pick import PickRig
+from tangle_drake.episode.episode import Episode
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.paths import diagrams_dir
@@ -36,7 +36,7 @@ RERUN_OFFSET = (1e-4, 0.0, 0.0)
 PICKS = ("full", "rerun", "fast")
 
 
-def run_pile(rigs: dict[str, PickRig], settings: PickDataSettings, task: int) -> dict:
+def run_pile(rigs: dict[str, Episode], settings: PickDataSettings, task: int) -> dict:
     """One pile's picks: per rank, each kind's outcome and wall seconds."""
     seed = pile_seed(settings.seed, task)
     settled = rigs["full"].settle(seed)
@@ -87,8 +87,8 @@ def main() -> int:
         scenario = pick_data_scenario((diagrams_dir() / PICK_SCENARIO).read_text(), settings)
         floating = scenario_mode(scenario, "the pick-data scenario") == "floating"
         methods = [Method("graspability", "graspability")]
-        rigs = {"full": PickRig(scenario, methods, args.part, floating),
-                "fast": PickRig(scenario, methods, args.part, floating, fast=True)}
+        rigs = {"full": Episode.single_pick(scenario, methods, args.part, floating),
+                "fast": Episode.single_pick(scenario, methods, args.part, floating, fast=True)}
     except TangleDrakeError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

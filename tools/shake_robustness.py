@@ -36,7 +36,8 @@ import numpy as np
 from pydrake.systems.analysis import InitializeParams
 from pydrake.systems.framework import Context
 
-from tangle_drake.bench.clearing import clearing_diagram, tray_count
+from tangle_drake.bench.clearing import tray_count
+from tangle_drake.episode.episode import Episode
 from tangle_drake.episode.run import PickEpisode, RunEnd
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import diagrams_dir
@@ -75,8 +76,8 @@ class _Rig:
 
 
 def _rig(scenario: Scenario, method: Method, part: str) -> _Rig:
-    pick = clearing_diagram(scenario, [method], part)
-    episode = PickEpisode(pick)
+    episode = Episode.clearing(scenario, [method], part).episode
+    pick = episode.pick
     return _Rig(episode, ContactScaler(pick.station.plant, pick.station.scene_graph),
                 pick.diagram.GetSubsystemByName("load_path_monitor (sim only)"),
                 episode.context.Clone())

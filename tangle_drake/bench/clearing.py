@@ -13,52 +13,36 @@ from __future__ import annotations
 
 import hashlib
 import time
-from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from pydrake.systems.framework import Context
 
 from tangle_drake.bench.trials import BenchConfig, PartSpec, method_seed, part_scenario, pile_seed
 from tangle_drake.bin_model import inside_bin
-from tangle_drake.episode.run import POLL, PickEpisode
+from tangle_drake.episode.episode import Episode
+from tangle_drake.episode.run import POLL
 from tangle_drake.pick.diagram import (
     PickDiagram,
-    build_pick_diagram,
-    closed_loop_settings,
-    pick_settings,
 )
 from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import PickRecord
-from tangle_drake.pile import PileSettler
-from tangle_drake.planning.motions import motion_for
-from tangle_drake.scenario import BinConfig, Scenario
-from tangle_drake.selection.choice import FALLBACK_RULE, TangleChoice
-from tangle_drake.selection.methods import Method, MethodRun, selection_wiring
-from tangle_drake.station import build_station
+from tangle_drake.scenario import BinConfig
+from tangle_drake.selection.methods import MethodRun
 
 SIM_TIME_PER_PART = 40.0
 """Simulated seconds allowed per part in the pile before a clearing is stopped, s."""
 
 
-@dataclass
-class _Rig:
-    settler: PileSettler
-    episode: PickEpisode
-    scenario: Any
-    methods: dict[str, Method] = field(default_factory=dict)
-
-
 class ClearWorker:
     """Clears bins (``(part index, trial index)``) for a :class:`BenchConfig` with ``clear``
-    set; keeps each part's rig once built. ``hanging_parts``: see :func:`clearing_diagram`
-    (a probe of the lift's height sets it; the benchmark keeps the default)."""
+    set; keeps each part's episode once built. ``hanging_parts``: see
+    :meth:`~tangle_drake.episode.episode.Episode.clearing` (a probe of the lift's height sets
+    it; the benchmark keeps the default)."""
 
     def __init__(self, config: BenchConfig, hanging_parts: float | None = None) -> None:
         self.config = config
         self.hanging_parts = hanging_parts
-        self._rigs: dict[str, _Rig] = {}
+        self._rigs: dict[str, Episode] = {}
 
     def run_task(self, task: tuple[int, int]) -> dict:
         part_index, trial = task
@@ -66,7 +50,7 @@ class ClearWorker:
         start, cpu = time.perf_counter(), time.process_time()
         rig = self._rig_for(spec)
         seed = pile_seed(self.config.seed, spec.name, trial)
-        settled = rig.settler.settle(seed)
+        settled = rig.settle(seed)
         pile = {"seed": seed, "parts": settled.report.num_parts,
                 "in_bin": settled.report.num_in_bin,
                 "digest": hashlib.sha256(settled.state.tobytes()).hexdigest()[:16]}
@@ -76,23 +60,17 @@ class ClearWorker:
         return {"part": spec.name, "trial": trial, "pile": pile, "runs": runs,
                 "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
 
-    def _rig_for(self, spec: PartSpec) -> _Rig:
+    def _rig_for(self, spec: PartSpec) -> Episode:
         if spec.name not in self._rigs:
-            scenario = part_scenario(self.config, spec)
-            methods = self.config.methods[spec.name]
-            pick = clearing_diagram(scenario, methods, spec.name, self.config.open_loop,
-                                    self.hanging_parts)
-            self._rigs[spec.name] = _Rig(PileSettler(build_station(scenario), scenario),
-                                         PickEpisode(pick), scenario,
-                                         {m.name: m for m in methods})
+            self._rigs[spec.name] = Episode.clearing(
+                part_scenario(self.config, spec), self.config.methods[spec.name], spec.name,
+                self.config.open_loop, self.hanging_parts)
         return self._rigs[spec.name]
 
-    def _clear(self, rig: _Rig, state, run: MethodRun, in_bin: int) -> dict:
+    def _clear(self, rig: Episode, state, run: MethodRun, in_bin: int) -> dict:
         start, cpu = time.perf_counter(), time.process_time()
         episode = rig.episode
         pick = episode.pick
-        episode.start(state, lambda context: pick.diagram.GetInputPort("method").FixValue(
-            context, run))
         rows: list[dict] = []
         tray = [0]
 
@@ -102,7 +80,8 @@ class ClearWorker:
             tray[0] = now
 
         watch = EscapeWatch(pick, rig.scenario.bin, episode.simulator.get_context(), rows)
-        result = episode.run(SIM_TIME_PER_PART * max(in_bin, 1), on_pick=grasp, step=watch)
+        result = rig.run(state, run, SIM_TIME_PER_PART * max(in_bin, 1), on_pick=grasp,
+                         step=watch)
         # Parts still falling into the tray after the last grasp was recorded come to rest.
         episode.simulator.AdvanceTo(episode.simulator.get_context().get_time() + 1.0)
         watch(Mode.DONE)  # the last look: where every part came to rest
@@ -158,21 +137,6 @@ class EscapeWatch:
                                      "part": int(part), "source": source})
         self._mode, self.in_bin, self.in_tray = mode, in_bin, in_tray
         return POLL
-
-
-def clearing_diagram(scenario: Scenario, methods: Sequence[Method], part: str,
-                     open_loop: bool = False,
-                     hanging_parts: float | None = None) -> PickDiagram:
-    """The pick diagram that clears a bin of ``scenario``: closed loop (at most one delivery
-    per part in the pile; ``hanging_parts`` as :func:`closed_loop_settings` takes it) or open
-    loop (two grasps per part)."""
-    count = scenario.pile.total_count
-    settings = pick_settings(scenario, max_picks=2 * count) if open_loop \
-        else closed_loop_settings(scenario, hanging_parts, max_picks=count)
-    return build_pick_diagram(
-        scenario, TangleChoice(None, FALLBACK_RULE), motion_for(scenario),
-        station=build_station(scenario), settings=settings,
-        selection=selection_wiring(methods, part, scenario))
 
 
 def tray_count(pick: PickDiagram, context: Context) -> int:

@@ -4,8 +4,8 @@ A trial is (part, trial index); its pile seed derives from (run seed, part, inde
 every method sees the same piles (the comparison is paired), whichever worker runs the trial
 and whenever (a resumed run redoes exactly the missing trials). The pile is dropped once in a
 bare copy of the station; its settled plant state is restored into the pick diagram before each
-method's pick (:mod:`tangle_drake.episode.single_pick`). The worker (:class:`TrialWorker`)
-builds a part's rig once and reuses it for every trial of that part.
+method's pick (:meth:`tangle_drake.episode.episode.Episode.single_pick`). The worker
+(:class:`TrialWorker`) builds a part's episode once and reuses it for every trial of that part.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from tangle_drake.bench.gallery import TILE_KEY, caption, failure_kind, timed_tile
-from tangle_drake.episode.single_pick import PickRig
+from tangle_drake.episode.episode import Episode
 from tangle_drake.failures import FailureKind
 from tangle_drake.pick.outcome import Outcome, PickRecord
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
@@ -122,7 +122,7 @@ class TrialWorker:
 
     def __init__(self, config: BenchConfig) -> None:
         self.config = config
-        self._rigs: dict[str, PickRig] = {}
+        self._rigs: dict[str, Episode] = {}
 
     def run_task(self, task: tuple[int, int]) -> dict:
         """One trial's result: the pile, and one pick per method (see ``results``)."""
@@ -147,14 +147,14 @@ class TrialWorker:
                 **({"physics": physics.to_dict()} if physics is not None else {}),
                 "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
 
-    def _rig_for(self, spec: PartSpec) -> PickRig:
+    def _rig_for(self, spec: PartSpec) -> Episode:
         if spec.name not in self._rigs:
-            self._rigs[spec.name] = PickRig(part_scenario(self.config, spec),
+            self._rigs[spec.name] = Episode.single_pick(part_scenario(self.config, spec),
                                             self.config.methods[spec.name], spec.name,
                                             floating=self.config.mode == "floating")
         return self._rigs[spec.name]
 
-    def _pick(self, rig: PickRig, state: np.ndarray, run: MethodRun, part: str,
+    def _pick(self, rig: Episode, state: np.ndarray, run: MethodRun, part: str,
               trial: int, physics: PickPhysics | None = None) -> dict:
         start, cpu = time.perf_counter(), time.process_time()
         pick = rig.pick(state, run, physics)

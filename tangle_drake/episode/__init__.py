@@ -1,5 +1,5 @@
-"""Running picks: the pick diagram's simulator restarted from settled piles (``run``), one
-physically simulated pick as the benchmark and the physical-pick data make it
-(``single_pick``), the benchmark's methods switched per run (``methods``), and the pick demo
-(``demo``), in simulation or against the hardware interface.
+"""Running picks: the pick diagram's simulator restarted from settled piles (``run``); one
+episode shape for every simulated run of a scenario, a settler and a pick diagram run pile
+after pile (``episode``: the benchmark's single picks and clearings, the physical-pick data,
+the tools); and the pick demo (``demo``), in simulation or against the hardware interface.
 """

@@ -4,7 +4,7 @@ The seed paper's second baseline (Matsumura et al. 2018) learns from simulated p
 physical gripper, not from a force that lifts one part. A task here is one settled pile of the
 benchmark's scenario (the floating gripper by default): graspability's first ``top_k``
 candidates are picked one by one, each from the same settled pile restored
-(:class:`~tangle_drake.episode.single_pick.PickRig`, the benchmark's own pick), and each is
+(:meth:`~tangle_drake.episode.episode.Episode.single_pick`, the benchmark's own pick), and each is
 stored with what came up, counted by the simulation: ``outcome`` 1 = exactly one part, 2 =
 several, 0 = none, in the codes of the pick log (:mod:`tangle_drake.pick.pick_log`), and
 ``label`` (tangled) 1 = several, 0 = one, -1 = none. A candidate that could not be picked
@@ -32,7 +32,7 @@ from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.crops import DEFAULT_CROP, CropSpec, extract_crop
 from tangle_drake.dataset import rows_to_arrays
 from tangle_drake.dataset.store import TaskResult
-from tangle_drake.episode.single_pick import PhysicalPick, PickRig
+from tangle_drake.episode.episode import Episode, PhysicalPick
 from tangle_drake.errors import TangleDrakeError, check_seed
 from tangle_drake.failures import FailureKind
 from tangle_drake.parts import load_part
@@ -77,7 +77,7 @@ class PickDataSettings:
     sensor's ~0.1-0.5 mm at half a metre. The graspability candidates, which the pick
     executes, come from the clean image. 0: the renderer's depth."""
     fast: bool = True
-    """The rig's shortcut (:class:`~tangle_drake.episode.single_pick.PickRig`): a grasp that
+    """The rig's shortcut (:meth:`~tangle_drake.episode.episode.Episode.single_pick`): a grasp that
     closed on nothing ends at the close, with the outcome the lift would have ended with."""
 
     def validate(self) -> None:
@@ -125,7 +125,7 @@ class PhysicalPickSimulator:
         self.scenario = pick_data_scenario(scenario_text, settings)
         self.part = load_part(settings.part, mesh_scale=settings.mesh_scale)
         mode = scenario_mode(self.scenario, "the pick-data scenario")
-        self.rig = PickRig(self.scenario, [Method("graspability", "graspability")],
+        self.rig = Episode.single_pick(self.scenario, [Method("graspability", "graspability")],
                            self.part.name, floating=mode == "floating", fast=settings.fast)
 
     def run_task(self, task: int) -> TaskResult:

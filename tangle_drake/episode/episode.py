@@ -1,26 +1,26 @@
-"""One physically simulated pick from a settled pile: the benchmark's trials and the physical-
-pick data of ``tangle-drake collect --label pick`` both run it, so the labels a model learns
-from are the outcomes the benchmark scores it by.
+"""One episode shape for every simulated run of a scenario: a part's pile settler and pick
+diagram, built once and run pile after pile. The benchmark's single picks and its clearings,
+the physical-pick data and the tools all go through :class:`Episode`; what differs between
+them is the planner's settings and the speed-ups, options of the episode.
 
-A part's :class:`PickRig` holds a bare station to drop and settle piles in and a pick diagram
-(the real fingers, on the gantry or the Nextage) whose ``GraspSelector`` follows the method on
-its ``method`` input. Each pick restores a settled plant state into the diagram and runs it
-until its one pick is recorded. Until the robot reaches into the bin the pile's bodies are
-locked: at rest and untouched, they cost the contact solver nothing (the approach is a fifth
-of a floating pick), and unlocking them at the descent leaves them exactly where they lay.
+Each run restores a settled plant state into the diagram and runs it from the diagram's
+initial state, so it depends on its pile alone (:class:`~.run.PickEpisode`). A single pick
+(:meth:`Episode.single_pick`) keeps the pile's bodies locked until the robot reaches into the
+bin: at rest and untouched, they cost the contact solver nothing (the approach is a fifth of
+a floating pick), and unlocking them at the descent leaves them exactly where they lay.
 
-A ``fast`` rig (the physical-pick data's) takes two shortcuts. It ends a grasp whose fingers
-closed on nothing at the close, judged empty as the top of the lift would judge it (fingers
-closed past the empty width are empty whatever the lift does:
+A ``fast`` single pick (the physical-pick data's) takes two shortcuts. It ends a grasp whose
+fingers closed on nothing at the close, judged empty as the top of the lift would judge it
+(fingers closed past the empty width are empty whatever the lift does:
 :func:`~tangle_drake.pick.outcome.classify_lift`), instead of lifting the empty gripper out:
 the same outcome, without the lift's simulated seconds. And from the descent on it keeps the
-parts the grasp cannot reach frozen (:mod:`tangle_drake.pile_freeze`, the auto-lift labeller's
-rule measured from the grasp: centres farther than ``FREEZE_BEYOND_RADII + 1`` bounding radii,
-since the target's centre lies within one radius of its grasp). Keeping the whole pile locked
-through the descent until the fingers touch it was tried and dropped: a pile frozen for that
-second instead of creeping is another pile, and it changed outcomes where moving the grasp a
-tenth of a millimetre did not (``docs/data-and-training.md``, Measured).
-``tools/fast_pick_agreement.py`` checks the fast rig against the full one.
+parts the grasp cannot reach frozen (:mod:`tangle_drake.pile_freeze`, the auto-lift
+labeller's rule measured from the grasp: centres farther than ``FREEZE_BEYOND_RADII + 1``
+bounding radii, since the target's centre lies within one radius of its grasp). Keeping the
+whole pile locked through the descent until the fingers touch it was tried and dropped: a
+pile frozen for that second instead of creeping is another pile, and it changed outcomes where
+moving the grasp a tenth of a millimetre did not (``docs/data-and-training.md``, Measured).
+``tools/fast_pick_agreement.py`` checks the fast pick against the full one.
 """
 
 from __future__ import annotations
@@ -32,11 +32,16 @@ import numpy as np
 from pydrake.systems.framework import Context
 
 from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.episode.run import SIM_TIME_PER_PICK, PickEpisode, RunEnd
+from tangle_drake.episode.run import SIM_TIME_PER_PICK, PickEpisode, PickRun, RunEnd
 from tangle_drake.parts import load_part
-from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
+from tangle_drake.pick.diagram import (
+    PickDiagram,
+    build_pick_diagram,
+    closed_loop_settings,
+    pick_settings,
+)
 from tangle_drake.pick.outcome import Outcome, PickRecord, classify_lift
-from tangle_drake.pick.planner import Mode
+from tangle_drake.pick.planner import Mode, PickSettings
 from tangle_drake.pile import PileSettler, SettledPile
 from tangle_drake.pile_freeze import FREEZE_BEYOND_RADII, PileFreeze, parts_beyond
 from tangle_drake.planning.motions import motion_for
@@ -67,29 +72,30 @@ class PhysicalPick:
     """The top camera's depth image the grasp was chosen on, (H, W) metres."""
 
 
-class PickRig:
-    """A part's pile settler and one-pick episode, built once and reused pile after pile.
+class Episode:
+    """A part's pile settler and pick diagram, built once and run pile after pile.
 
-    ``floating``: the gripper rides the gantry (the scenario's carrier), whose stiff servos do
-    not lag behind the descent as the arm does; the pile is at rest already and nothing is
-    released after the count, so the waits are short and the gripper does not go home.
+    ``methods`` are the diagram's (its ``method`` input switches between them), ``part`` finds
+    their shipped models, ``settings`` are the planner's. ``lock_until_descent`` keeps the
+    settled pile locked until the robot reaches into the bin, and ``fast`` takes the
+    physical-pick data's shortcuts (see the module docstring; single picks only).
     """
 
     def __init__(self, scenario: Scenario, methods: Sequence[Method], part: str,
-                 floating: bool, fast: bool = False) -> None:
-        settings = pick_settings(scenario, max_picks=1)
-        if floating:
-            settings = replace(settings, settle_time=0.05, close_delay=0.05,
-                               release_time=_POLL)
+                 settings: PickSettings, *, return_home: bool = True,
+                 lock_until_descent: bool = False, fast: bool = False,
+                 sim_limit: float = SIM_TIME_PER_PICK) -> None:
         pick = build_pick_diagram(
             scenario, TangleChoice(None, FALLBACK_RULE),
-            motion_for(scenario, return_home=not floating), station=build_station(scenario),
+            motion_for(scenario, return_home=return_home), station=build_station(scenario),
             settings=settings, selection=selection_wiring(methods, part, scenario))
+        self.scenario = scenario
         self.settler = PileSettler(build_station(scenario), scenario)
         self.episode = PickEpisode(pick)
-        self.sim_limit = FLOATING_SIM_LIMIT if floating else SIM_TIME_PER_PICK
+        self.sim_limit = sim_limit
         self.update_period = settings.update_period
         """The planner's: while the pile is locked, the driver looks at every update."""
+        self.lock_until_descent = lock_until_descent
         self.fast = fast
         self.empty_width = settings.empty_width
         self.methods = {m.name: m for m in methods}
@@ -103,6 +109,36 @@ class PickRig:
             for entry in scenario.pile.parts)
         """Parts whose centre lies farther than this from the grasp stay frozen (``fast``), m."""
 
+    @classmethod
+    def single_pick(cls, scenario: Scenario, methods: Sequence[Method], part: str,
+                    floating: bool, fast: bool = False) -> Episode:
+        """One pick per run, the benchmark's and the physical-pick data's. ``floating``: the
+        gripper rides the gantry (the scenario's carrier), whose stiff servos do not lag
+        behind the descent as the arm does; the pile is at rest already and nothing is
+        released after the count, so the waits are short and the gripper does not go home."""
+        settings = pick_settings(scenario, max_picks=1)
+        if floating:
+            settings = replace(settings, settle_time=0.05, close_delay=0.05,
+                               release_time=_POLL)
+        return cls(scenario, methods, part, settings, return_home=not floating,
+                   lock_until_descent=True, fast=fast,
+                   sim_limit=FLOATING_SIM_LIMIT if floating else SIM_TIME_PER_PICK)
+
+    @classmethod
+    def clearing(cls, scenario: Scenario, methods: Sequence[Method], part: str,
+                 open_loop: bool = False, hanging_parts: float | None = None) -> Episode:
+        """A whole bin per run: closed loop (at most one delivery per part in the pile;
+        ``hanging_parts`` as :func:`closed_loop_settings` takes it) or open loop (two grasps
+        per part)."""
+        count = scenario.pile.total_count
+        settings = pick_settings(scenario, max_picks=2 * count) if open_loop \
+            else closed_loop_settings(scenario, hanging_parts, max_picks=count)
+        return cls(scenario, methods, part, settings)
+
+    @property
+    def pick_diagram(self) -> PickDiagram:
+        return self.episode.pick
+
     def settle(self, seed: int) -> SettledPile:
         """Drop and settle the pile made with ``seed``."""
         return self.settler.settle(seed)
@@ -115,7 +151,7 @@ class PickRig:
         episode = self.episode
         diagram, station = episode.pick.diagram, episode.pick.station
         depth = []
-        locked = station.pile_bodies
+        locked = station.pile_bodies if self.lock_until_descent else []
         if physics is not None:
             run = run._replace(offset=physics.offset)
 
@@ -150,6 +186,16 @@ class PickRig:
             self._freeze.thaw(episode.context)
         record = result.records[0] if result.records else None
         return PhysicalPick(record, result.time, self._image(depth))
+
+    def run(self, state: np.ndarray, run: MethodRun, time_limit: float,
+            **options) -> PickRun:
+        """Restore the settled plant ``state`` and run the diagram as ``run`` says until its
+        planner is done or ``time_limit`` simulated seconds have passed (``options``: as
+        :func:`~.run.run_picks` takes them): a clearing's whole bin."""
+        diagram = self.episode.pick.diagram
+        self.episode.start(state, lambda context: diagram.GetInputPort("method").FixValue(
+            context, run))
+        return self.episode.run(time_limit, **options)
 
     def _freeze_out_of_reach(self) -> None:
         """Freeze the parts too far from the grasp being made to take part in its lift."""
