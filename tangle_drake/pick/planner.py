@@ -83,8 +83,6 @@ port                         dir    value
 
 from __future__ import annotations
 
-import time
-from collections import Counter
 from dataclasses import replace
 
 import numpy as np
@@ -93,23 +91,20 @@ from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
 from pydrake.systems.sensors import ImageDepth32F
 
 from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.crops import candidate_crops
-from tangle_drake.failures import FailureKind, pick_failure
-from tangle_drake.pick.choose import EmptyGrasp, choose, rank_scored
+from tangle_drake.failures import FailureKind
+from tangle_drake.pick.choose import EmptyGrasp, rank_scored
 from tangle_drake.pick.closed_loop import FALLBACK, ClosedLoop, with_reason
 from tangle_drake.pick.modes import Mode, PickSettings, PlannerState
 from tangle_drake.pick.outcome import (
-    VIEW_CANDIDATES,
     Outcome,
     PickRecord,
-    PickView,
     classify_lift,
 )
 from tangle_drake.pick.payload import PayloadEstimate, PayloadPhase, PayloadRequest
+from tangle_drake.pick.perception import Perception
 from tangle_drake.pick.recovery import Disposition
 from tangle_drake.pick.truth import CHECK
 from tangle_drake.planning.motion import Motion
-from tangle_drake.selection.rules import ScoredCandidate
 
 __all__ = ["Mode", "PickPlanner", "PickSettings", "rank_scored"]
 
@@ -121,7 +116,7 @@ _MOVING = (*_PLANNED, Mode.SHAKE, Mode.PUT_BACK, Mode.SHAKE_OFF, Mode.RAISE)
 which the closed loop watches itself."""
 
 
-class PickPlanner(ClosedLoop, LeafSystem):
+class PickPlanner(Perception, ClosedLoop, LeafSystem):
     """The pick state machine (see the module docstring), driving ``motion``'s manipulator."""
 
     def __init__(self, motion: Motion, settings: PickSettings | None = None,
@@ -333,72 +328,6 @@ class PickPlanner(ClosedLoop, LeafSystem):
         return replace(s, mode=Mode.DONE if done else s.mode, since=t)
 
     # --- perceive, select, plan --------------------------------------------------------------
-
-    def _look(self, context: Context, s: PlannerState, t: float) -> PlannerState:
-        """PERCEIVE once the camera's last image arrived after SETTLE began (the arm's last
-        motion ended); wait for one, and past ``image_timeout`` stop: a STALE_IMAGE failure."""
-        if not self._image_time.HasValue(context):
-            return replace(s, mode=Mode.PERCEIVE, since=t)
-        arrived = float(self._image_time.Eval(context)[0])
-        if arrived >= s.since:
-            return replace(s, mode=Mode.PERCEIVE, since=t)
-        if t - s.since < self._settings.settle_time + self._settings.image_timeout:
-            return s
-        age = "no image yet" if arrived == -np.inf else \
-            f"the last one arrived at t={arrived:.2f} s"
-        record = PickRecord(index=len(s.picks) + 1, failure=FailureKind.STALE_IMAGE,
-                            reason=f"no camera image after the arm stopped at t={s.since:.2f} s "
-                                   f"({age}): is the camera frozen?")
-        return self._finish(s, record, t)
-
-    def _perceive(self, context: Context, s: PlannerState) -> PlannerState:
-        t = context.get_time()
-        if s.loop.stir_due:  # the grasp that asked for it waits in ``s.record``
-            return self._stir(context, s, t, s.record)
-        record = PickRecord(index=len(s.picks) + 1)
-        start = time.perf_counter()
-        candidates = list(self._candidates.Eval(context))
-        record.perception_s = time.perf_counter() - start
-        scored = [ScoredCandidate(c, None, float(c.score)) for c in candidates]
-        ranked = scored
-        start = time.perf_counter()  # HasValue evaluates a connected port: the CNN runs here
-        if self._scored.HasValue(context):
-            selected = self._selected.Eval(context) if self._selected.HasValue(context) else None
-            scored = list(self._scored.Eval(context))
-            ranked = rank_scored(scored, selected)
-            record.cnn_s = time.perf_counter() - start
-        if self._settings.record_view and self._depth.HasValue(context):
-            depth = np.array(self._depth.Eval(context).data)[:, :, 0]
-            record.view = PickView(depth, scored[:VIEW_CANDIDATES])
-        if not ranked:
-            record.failure = FailureKind.NO_CANDIDATE
-            record.reason = "no grasp candidate in the bin"
-            return self._nothing_to_pick(context, s, record, t)
-        plan = choose(record, ranked, self._motion, self._measured.Eval(context),
-                      s.empty_grasps, self._settings.repeat_rule, self._tips_above(context))
-        if plan is None:
-            kinds = Counter(r.kind for r in record.rejected)
-            record.failure = pick_failure(kinds)
-            record.reason = "no candidate can be picked (" + ", ".join(
-                f"{n} {kind.value}" for kind, n in kinds.items()) + ")"
-            return self._nothing_to_pick(context, s, record, t)
-        if self._settings.record_crop is not None and self._depth.HasValue(context):
-            depth = np.asarray(self._depth.Eval(context).data)[:, :, 0]
-            record.crop = candidate_crops(depth, self._intrinsics, [record.candidate],
-                                          self._settings.record_crop)[0]
-        record.started_at = t
-        s = replace(s, plan=plan, record=record, started=t, width=self._settings.open_width)
-        return self._enter(Mode.APPROACH, s, t)
-
-    def _tips_above(self, context: Context) -> float | None:
-        """Closed loop, where the bin is seen: the world height the lift takes the fingertips
-        to, so that what hangs from them is weighed clear of the pile
-        (``RecoverySettings.hanging_length``); ``None``: the approach's own lift height."""
-        if self._recovery is None or self._recovery.hanging_length <= 0 \
-                or not self._contents.HasValue(context):
-            return None
-        contents = self._contents.Eval(context)
-        return contents.bin.floor_height + contents.top() + self._recovery.hanging_length
 
     @staticmethod
     def _empty(record: PickRecord) -> EmptyGrasp:
