@@ -13,12 +13,14 @@ import numpy as np
 import pytest
 
 from tangle_drake.cli import SAFETY_STOP_EXIT
-from tangle_drake.paths import diagrams_dir
-from tangle_drake.scenario import load_scenario
+from tangle_drake.scenario import Scenario
+from tangle_drake.scenario.files import scenario_source
 from tangle_drake.scenario.hardware import HardwareConfig
 
 HARNESS = Path(__file__).with_name("two_processes.py")
 URL = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
+BASE = "floating_gripper.yaml"
+"""The shipped scenario both processes start from; the test's overlay goes on it."""
 NAMESPACE = "ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec \"$@\""
 
 
@@ -38,24 +40,26 @@ pytestmark = pytest.mark.skipif(bool(problem := _namespace_problem()), reason=pr
 
 
 def _scenario(tmp_path: Path, startup_timeout: float | None = None, extra: str = "") -> Path:
-    """The floating gripper on three parts (light enough that two processes keep real time on
-    two cores), on a multicast bus; the default start-up timeout unless one is given."""
-    text = (diagrams_dir() / "floating_gripper.yaml").read_text()
-    assert "count: 15" in text
-    text = text.replace("count: 15", "count: 3")
+    """An overlay on the floating gripper, as a user would write one: three parts (light
+    enough that two processes keep real time on two cores), a multicast bus, and the default
+    start-up timeout unless one is given. Both processes take ``--scenario BASE OVERLAY``."""
     fields = [] if startup_timeout is None else [f"startup_timeout: {startup_timeout}"]
     hardware = ", ".join(fields + ([extra] if extra else []))
-    text += (f"lcm_buses: {{default: {{lcm_url: \"{URL}\"}}}}\n"
-             f"hardware: {{{hardware}}}\n")
     path = tmp_path / "net.yaml"
-    path.write_text(text)
+    path.write_text("pile: {parts: [{part: u_hook, count: 3}]}\n"
+                    f"lcm_buses: {{default: {{lcm_url: \"{URL}\"}}}}\n"
+                    f"hardware: {{{hardware}}}\n")
     return path
+
+
+def _load(overlay: Path) -> Scenario:
+    return scenario_source([BASE, overlay]).load()
 
 
 def _run(case: str, scenario: Path, tmp_path: Path) -> dict:
     done = subprocess.run(
         ["unshare", "-n", "sh", "-c", NAMESPACE, "sh", sys.executable, str(HARNESS), case,
-         str(scenario), str(tmp_path)],
+         str(tmp_path), BASE, str(scenario)],
         capture_output=True, text=True, timeout=400, cwd=tmp_path)
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -100,7 +104,7 @@ def _killed_mid_pick(case: str, tmp_path: Path) -> tuple[dict, HardwareConfig]:
     result = _run(case, scenario, tmp_path)
     _no_traceback(result)
     assert result["connected"], result["controller_log"]
-    return result, load_scenario(scenario).hardware
+    return result, _load(scenario).hardware
 
 
 def test_a_bridge_that_stops_mid_pick_ends_the_controller_naming_the_stale_channel(tmp_path):

@@ -24,7 +24,7 @@ from pathlib import Path
 from drake import lcmt_iiwa_status
 from pydrake.lcm import DrakeLcm
 
-from tangle_drake.scenario import load_scenario
+from tangle_drake.scenario.files import scenario_source
 
 MID_PICK = 3.0
 """Wall seconds after the controller connects at which a process is killed: mid-pick."""
@@ -95,15 +95,15 @@ class Process:
             return None
 
 
-def run(case: str, scenario_path: str, workdir: Path) -> dict:
-    scenario = load_scenario(scenario_path)
+def run(case: str, scenario_files: list[str], workdir: Path) -> dict:
+    scenario = scenario_source(scenario_files).load()
     url = scenario.lcm_buses["default"].lcm_url
     arm = scenario.model_drivers["gantry"]
     listener = Listener(url, [arm.command_channel, arm.status_channel])
-    robot_args = command("hardware-sim", "--scenario", scenario_path)
+    robot_args = command("hardware-sim", "--scenario", *scenario_files)
     picks = "1" if case in ("pick", "late_robot") else "3"  # the others stop it mid-pick
     controller_args = command("demo", "--hardware", "--picks", picks, "--scenario",
-                              scenario_path)
+                              *scenario_files)
     result: dict = {"case": case}
     robot = controller = None
     try:
@@ -155,5 +155,5 @@ def run(case: str, scenario_path: str, workdir: Path) -> dict:
 
 
 if __name__ == "__main__":
-    case, scenario_file, directory = sys.argv[1:4]
-    print(json.dumps(run(case, scenario_file, Path(directory))))
+    case, directory, *scenario_files = sys.argv[1:]
+    print(json.dumps(run(case, scenario_files, Path(directory))))
