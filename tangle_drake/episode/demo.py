@@ -17,10 +17,10 @@ from pydrake.systems.framework import Context, Diagram, EventStatus
 
 from tangle_drake.bin_model import inside_bin
 from tangle_drake.crops import CropSpec
+from tangle_drake.episode.episode import Episode
 from tangle_drake.episode.run import (
     SIM_TIME_PER_PICK,
     Clock,
-    PickEpisode,
     PickRun,
     RunEnd,
     run_picks,
@@ -43,13 +43,14 @@ from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.pick_log import PickLog, pick_log_identity
 from tangle_drake.pick.pictures import PickPictures
 from tangle_drake.pick.planner import PickSettings
-from tangle_drake.pile import check_pile, settle_pile
+from tangle_drake.pile import check_pile
 from tangle_drake.planning.motion import Motion
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario
 from tangle_drake.scenario.files import ScenarioSource, scenario_source
 from tangle_drake.scenario.hardware import IN_PROCESS_URL
 from tangle_drake.selection.choice import TangleChoice, model_part_notice, resolve_tangle_choice
+from tangle_drake.selection.methods import MethodRun, choice_method
 from tangle_drake.station import SimulatedStation, build_station, camera_model
 from tangle_drake.tangle_cnn.model import load_tangle_model
 
@@ -168,21 +169,19 @@ def _run_demo(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
         meshcat = Meshcat(MeshcatParams(host="localhost"))
         say(f"Meshcat: {meshcat.web_url()}")
     start = time.perf_counter()
-    station = build_station(scenario, meshcat)
+    runner = Episode(scenario, [choice_method(choice)], None, settings, meshcat=meshcat)
     if meshcat is not None:
         frame_the_work(meshcat, scenario)
-    pile = settle_pile(station, scenario, options.seed)
+    pile = runner.settle(options.seed)
     say(f"pile: {pile.report.num_in_bin}/{pile.report.num_parts} parts in the bin, settled in "
         f"{pile.report.wall_time:.1f} s")
     if log is not None:
         log.pile_seed = pile.report.seed
-    pick = build_pick_diagram(scenario, choice, motion, station=station,
-                              settings=settings, seed=scenario.random_seed)
+    pick, episode = runner.pick_diagram, runner.episode
     if options.diagram is not None:
         write_graphviz(pick.diagram.GetGraphvizString(max_depth=1), Path(options.diagram))
         say(f"wrote {options.diagram}")
-    episode = PickEpisode(pick)
-    episode.start(pile.state)
+    runner.start(pile.state, MethodRun(choice.rule, scenario.random_seed))
     say(f"set-up {time.perf_counter() - start:.1f} s; picking {options.picks} part(s)")
 
     if meshcat is not None and options.record:

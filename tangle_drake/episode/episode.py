@@ -1,7 +1,8 @@
 """One episode shape for every simulated run of a scenario: a part's pile settler and pick
-diagram, built once and run pile after pile. The benchmark's single picks and its clearings,
-the physical-pick data and the tools all go through :class:`Episode`; what differs between
-them is the planner's settings and the speed-ups, options of the episode.
+diagram, built once and run pile after pile. The demo, the benchmark's single picks and its
+clearings, the physical-pick data and the tools all go through :class:`Episode`; what differs
+between them is the planner's settings and the speed-ups, options of the episode (the
+hardware-in-the-loop run builds its pick diagram around the hardware station instead).
 
 Each run restores a settled plant state into the diagram and runs it from the diagram's
 initial state, so it depends on its pile alone (:class:`~.run.PickEpisode`). A single pick
@@ -29,6 +30,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
+from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Context
 
 from tangle_drake.camera import CameraIntrinsics
@@ -84,13 +86,14 @@ class Episode:
     def __init__(self, scenario: Scenario, methods: Sequence[Method], part: str,
                  settings: PickSettings, *, return_home: bool = True,
                  lock_until_descent: bool = False, fast: bool = False,
-                 sim_limit: float = SIM_TIME_PER_PICK) -> None:
+                 sim_limit: float = SIM_TIME_PER_PICK, meshcat: Meshcat | None = None) -> None:
         pick = build_pick_diagram(
             scenario, TangleChoice(None, FALLBACK_RULE),
-            motion_for(scenario, return_home=return_home), station=build_station(scenario),
-            settings=settings, selection=selection_wiring(methods, part, scenario))
+            motion_for(scenario, return_home=return_home),
+            station=build_station(scenario, meshcat), settings=settings,
+            selection=selection_wiring(methods, part, scenario))
         self.scenario = scenario
-        self.settler = PileSettler(build_station(scenario), scenario)
+        self.settler = PileSettler(build_station(scenario, meshcat), scenario)
         self.episode = PickEpisode(pick)
         self.sim_limit = sim_limit
         self.update_period = settings.update_period
@@ -187,14 +190,19 @@ class Episode:
         record = result.records[0] if result.records else None
         return PhysicalPick(record, result.time, self._image(depth))
 
-    def run(self, state: np.ndarray, run: MethodRun, time_limit: float,
-            **options) -> PickRun:
-        """Restore the settled plant ``state`` and run the diagram as ``run`` says until its
-        planner is done or ``time_limit`` simulated seconds have passed (``options``: as
-        :func:`~.run.run_picks` takes them): a clearing's whole bin."""
+    def start(self, state: np.ndarray, run: MethodRun) -> None:
+        """Restore the settled plant ``state`` into the diagram's initial state, selecting as
+        ``run`` says."""
         diagram = self.episode.pick.diagram
         self.episode.start(state, lambda context: diagram.GetInputPort("method").FixValue(
             context, run))
+
+    def run(self, state: np.ndarray, run: MethodRun, time_limit: float,
+            **options) -> PickRun:
+        """:meth:`start`, then run the diagram until its planner is done or ``time_limit``
+        simulated seconds have passed (``options``: as :func:`~.run.run_picks` takes them): a
+        clearing's whole bin."""
+        self.start(state, run)
         return self.episode.run(time_limit, **options)
 
     def _freeze_out_of_reach(self) -> None:

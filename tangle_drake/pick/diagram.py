@@ -17,7 +17,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
@@ -46,7 +45,7 @@ from tangle_drake.pick.truth import PickTruth
 from tangle_drake.planning.motion import Motion
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
 from tangle_drake.selection.choice import TangleChoice
-from tangle_drake.selection.methods import Method, MethodRun, selection_wiring
+from tangle_drake.selection.methods import MethodRun, choice_method, selection_wiring
 from tangle_drake.station import SimulatedStation, build_station, camera_model
 
 WRIST = "wrist"
@@ -237,9 +236,8 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
         builder.Connect(depth, planner.GetInputPort("depth_image"))
     builder.Connect(graspability.GetOutputPort("candidates"), planner.GetInputPort("candidates"))
     if selection is None:  # the choice's method, fixed
-        method = Method(choice.rule, choice.rule, None if choice.model is None
-                        else Path(choice.model))
-        selection = selection_wiring([method], None, scenario, MethodRun(choice.rule, seed))
+        selection = selection_wiring([choice_method(choice)], None, scenario,
+                                     MethodRun(choice.rule, seed))
     scored, selected = selection(builder, depth, graspability.GetOutputPort("candidates"))
     builder.Connect(scored, planner.GetInputPort("scored_candidates"))
     builder.Connect(selected, planner.GetInputPort("selected_grasp"))

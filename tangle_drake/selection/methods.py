@@ -27,7 +27,12 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability.roi import bin_roi
 from tangle_drake.paths import shown_path
 from tangle_drake.scenario import Scenario
-from tangle_drake.selection.choice import default_rule, model_objective, trained_model_path
+from tangle_drake.selection.choice import (
+    TangleChoice,
+    default_rule,
+    model_objective,
+    trained_model_path,
+)
 from tangle_drake.selection.emap_system import add_emap_selection
 from tangle_drake.selection.registry import (
     METHOD_NAMES,
@@ -86,6 +91,11 @@ class Method:
         if part is None:
             raise TangleDrakeError(f"method {self.name!r} needs a model: name its checkpoint")
         return trained_model_path(part, self.objective.name)
+
+
+def choice_method(choice: TangleChoice) -> Method:
+    """The method a pick's choice of rule and model (:mod:`.choice`) selects by."""
+    return Method(choice.rule, choice.rule, None if choice.model is None else Path(choice.model))
 
 
 def parse_method(text: str) -> Method:
