@@ -14,6 +14,7 @@ from pydrake.common.yaml import yaml_dump_typed
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import diagrams_dir
+from tangle_drake.pick.diagram import closed_loop_settings
 from tangle_drake.scenario import load_scenario
 from tangle_drake.scenario.files import scenario_source
 from tangle_drake.scenario.yaml_io import Tagged, TaggedLoader
@@ -108,3 +109,26 @@ def test_the_clearings_overlays_give_the_scenarios_their_results_ran_on(result, 
     assert hashlib.sha256(recorded).hexdigest() in (folder / "bench.json").read_text()
     paths = [files[0], *(OVERLAYS / name for name in files[1:])]
     assert typed(scenario_source(paths).load()) == typed(load_scenario(folder / "scenario.yaml"))
+
+
+def test_the_scenario_holds_how_the_run_picks():
+    """``pick``: closed or open loop, the lift's hanging chain, the demo's rule and model."""
+    default = scenario_source("pick_demo.yaml").load()
+    assert default.pick.closed_loop and default.pick.hanging_parts == 2.0
+    fixed_lift = scenario_source("pick_demo.yaml", ["pick: {hanging_parts: 0}"]).load()
+    assert closed_loop_settings(fixed_lift).recovery.hanging_length == 0.0
+    assert closed_loop_settings(default).recovery.hanging_length > 0.1
+    with pytest.raises(TangleDrakeError, match=r"'pick\.hanging_parts' must be >= 0"):
+        scenario_source("pick_demo.yaml", ["pick: {hanging_parts: -1}"]).load()
+
+
+@pytest.mark.parametrize(("overlay", "refusal"), [
+    ("pick: {closed_loop: false}", "--log-picks labels each grasp with its weighing"),
+    ("pick: {rule: sideways}", "scenario field 'pick.rule': unknown selection rule 'sideways'"),
+])
+def test_the_demo_reads_the_scenarios_pick_settings(overlay, refusal, tmp_path):
+    command = [sys.executable, "-m", "tangle_drake.cli", "demo", "--picks", "1",
+               "--scenario-text", overlay, "--log-picks", str(tmp_path / "log")]
+    refused = subprocess.run(command, capture_output=True, text=True, timeout=120)
+    assert refused.returncode == 2 and refusal in refused.stderr, refused.stderr
+    assert not (tmp_path / "log").exists()

@@ -176,10 +176,11 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
     if options.perturb and options.clear:
         raise TangleDrakeError("--perturb perturbs single picks; bin clearing runs the model's "
                                "physics")
+    open_loop = options.clear and (options.open_loop or not scenario.pick.closed_loop)
     config = BenchConfig(text, tuple(parts), per_part, mode, options.seed, pile_size,
-                         options.clear, options.open_loop, options.gallery,
+                         options.clear, open_loop, options.gallery,
                          PhysicsSpread() if options.perturb else None)
-    if options.clear and not options.open_loop:
+    if options.clear and not open_loop:
         closed_loop_settings(scenario)  # a tray and a wrist sensor, or a clear error now
         notices += [warning for spec in parts if (warning := weighing_warning(
             part_scenario(config, spec)))]

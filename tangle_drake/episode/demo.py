@@ -51,6 +51,7 @@ from tangle_drake.scenario.files import ScenarioSource, scenario_source
 from tangle_drake.scenario.hardware import IN_PROCESS_URL
 from tangle_drake.selection.choice import TangleChoice, model_part_notice, resolve_tangle_choice
 from tangle_drake.selection.methods import MethodRun, choice_method
+from tangle_drake.selection.rules import check_rule
 from tangle_drake.station import SimulatedStation, build_station, camera_model
 from tangle_drake.tangle_cnn.model import load_tangle_model
 
@@ -108,9 +109,6 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
         raise TangleDrakeError(f"--record must name an .html file, not {options.record}")
     if options.with_hardware_sim and not options.hardware:
         raise TangleDrakeError("--with-hardware-sim goes with --hardware")
-    if options.log_picks is not None and options.open_loop:
-        raise TangleDrakeError("--log-picks labels each grasp with its weighing, which the "
-                               "open loop does not make: leave out --open-loop")
     if options.hardware and (options.meshcat or options.record or options.diagram):
         raise TangleDrakeError("--meshcat, --record and --diagram show the simulated station; "
                                "with --hardware there is none in the controller (run "
@@ -122,17 +120,28 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
         raise TangleDrakeError("the scenario's pile has no parts: there is nothing to pick")
     for warning in check_pile(scenario):
         say(warning)
+    open_loop = options.open_loop or not scenario.pick.closed_loop
+    if options.log_picks is not None and open_loop:
+        raise TangleDrakeError("--log-picks labels each grasp with its weighing, which the "
+                               "open loop does not make: leave out --open-loop (or the "
+                               "scenario's 'pick: {closed_loop: false}')")
     part = options.part or scenario.pile.parts[0].part
-    choice = resolve_tangle_choice(part, options.rule, options.model)
+    if options.rule is None and scenario.pick.rule is not None:
+        try:
+            check_rule(scenario.pick.rule)
+        except TangleDrakeError as error:
+            raise TangleDrakeError(f"scenario field 'pick.rule': {error}") from error
+    choice = resolve_tangle_choice(part, options.rule or scenario.pick.rule,
+                                   options.model or scenario.pick.model)
     if choice.notice:
         say(choice.notice)
     if choice.model is not None and (mismatch := model_part_notice(choice.model, part)):
         say(mismatch)
     say(f"selection: rule {choice.rule}" + (f", model {choice.model}" if choice.model else ""))
     motion = motion_for(scenario)  # before any long work: the scenario must have a robot
-    settings = pick_settings(scenario, max_picks=options.picks) if options.open_loop \
+    settings = pick_settings(scenario, max_picks=options.picks) if open_loop \
         else closed_loop_settings(scenario, max_picks=options.picks)
-    if not options.open_loop and (warning := weighing_warning(scenario)):
+    if not open_loop and (warning := weighing_warning(scenario)):
         say(warning)
     # Meshcat's candidate markers and the pictures are drawn from each look's record.
     settings = replace(settings, record_view=bool(options.meshcat or options.record

@@ -85,6 +85,28 @@ class PartCount:
 
 
 @dataclass
+class PickConfig:
+    """How the pick diagram picks, as a run of this scenario does unless a command's flag says
+    otherwise (``--open-loop``, ``--rule``, ``--model``)."""
+
+    closed_loop: bool = True
+    """Weigh every lift, shake or put back what is not one part (needs the ``wrist`` sensor and
+    a tray); false: the paper's open loop, one look and one grasp per pick."""
+    hanging_parts: float = 2.0
+    """Closed loop: the longest chain the weighing must see whole, in lengths of the pile's
+    longest part: the held part and one hooked on it (a third is rare, and a shake drops most
+    seconds); the lift goes that high over the pile. 0: the approach's fixed lift."""
+    rule: str | None = None
+    """The demo's selection rule (``tangle-drake demo --help`` lists them); ``None``: the
+    paper's harmonic rule with a model, else graspability alone."""
+    model: str | None = None
+    """The demo's model checkpoint; ``None``: the part's shipped one."""
+
+    def validate(self, where: str) -> None:
+        _require(self.hanging_parts >= 0, f"{where}.hanging_parts", "must be >= 0")
+
+
+@dataclass
 class PileConfig:
     """How the random pile is made: which parts, and when it counts as settled."""
 
@@ -143,6 +165,7 @@ class Scenario:
     random_seed: int = 0
     """Seeds the run's draws other than the pile's (``pile.seed``): the ``random`` rule's
     choices. The same scenario gives the same run."""
+    pick: PickConfig = field(default_factory=PickConfig)
     camera: CameraConfig = field(default_factory=_default_camera)
     camera_height: float | None = 0.5
     """If set, the camera looks straight down from this height above the bin's floor centre
@@ -170,6 +193,7 @@ class Scenario:
             _require(not _footprints_overlap(self.bin, self.tray), "tray",
                      "must stand beside the bin, not over it")
         self.pile.validate("pile")
+        self.pick.validate("pick")
         _require(0 <= self.random_seed < SEED_LIMIT, "random_seed",
                  "must be a non-negative 63-bit integer")
         _require(self.camera.depth, "camera.depth", "must be true: graspability needs depth")
