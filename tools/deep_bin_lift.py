@@ -25,20 +25,22 @@ from tangle_drake.bench.clear_report import figures
 from tangle_drake.bench.clearing import ClearWorker
 from tangle_drake.bench.runner import BenchOptions, plan
 from tangle_drake.errors import TangleDrakeError
+from tangle_drake.scenario.files import scenario_source
 
 SCENARIO = "diagrams/dense_bin.yaml"
 
 
 def run(args: argparse.Namespace) -> None:
+    variant = f"pick: {{hanging_parts: {args.hanging_parts:g}}}"  # an overlay on the scenario
     config, trials, notices = plan(BenchOptions(
         methods=[args.method], parts=args.parts, trials=args.trials, seed=args.seed,
-        scenario=args.scenario, clear=True))
+        scenario=scenario_source(args.scenario, [variant]), clear=True))
     for notice in notices:
         print(notice, file=sys.stderr)
     out = args.out / f"hanging_{args.hanging_parts:g}.jsonl"
     out.parent.mkdir(parents=True, exist_ok=True)
     done = {(r["part"], r["trial"]) for r in _read(out)}
-    worker = ClearWorker(config, args.hanging_parts)
+    worker = ClearWorker(config)
     todo = [(i, t) for i, spec in enumerate(config.parts) for t in range(trials)
             if (spec.name, t) not in done]
     print(f"{len(done)} bin(s) done before, {len(todo)} to clear into {out}", flush=True)

@@ -35,13 +35,10 @@ SIM_TIME_PER_PART = 40.0
 
 class ClearWorker:
     """Clears bins (``(part index, trial index)``) for a :class:`BenchConfig` with ``clear``
-    set; keeps each part's episode once built. ``hanging_parts``: see
-    :meth:`~tangle_drake.episode.episode.Episode.clearing` (a probe of the lift's height sets
-    it; the benchmark keeps the default)."""
+    set; keeps each part's episode once built."""
 
-    def __init__(self, config: BenchConfig, hanging_parts: float | None = None) -> None:
+    def __init__(self, config: BenchConfig) -> None:
         self.config = config
-        self.hanging_parts = hanging_parts
         self._rigs: dict[str, Episode] = {}
 
     def run_task(self, task: tuple[int, int]) -> dict:
@@ -64,7 +61,7 @@ class ClearWorker:
         if spec.name not in self._rigs:
             self._rigs[spec.name] = Episode.clearing(
                 part_scenario(self.config, spec), self.config.methods[spec.name], spec.name,
-                self.config.open_loop, self.hanging_parts)
+                self.config.open_loop)
         return self._rigs[spec.name]
 
     def _clear(self, rig: Episode, state, run: MethodRun, in_bin: int) -> dict:

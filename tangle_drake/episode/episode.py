@@ -129,13 +129,12 @@ class Episode:
 
     @classmethod
     def clearing(cls, scenario: Scenario, methods: Sequence[Method], part: str,
-                 open_loop: bool = False, hanging_parts: float | None = None) -> Episode:
-        """A whole bin per run: closed loop (at most one delivery per part in the pile;
-        ``hanging_parts`` as :func:`closed_loop_settings` takes it) or open loop (two grasps
-        per part)."""
+                 open_loop: bool = False) -> Episode:
+        """A whole bin per run: closed loop (at most one delivery per part in the pile, the
+        lift as the scenario's ``pick`` says) or open loop (two grasps per part)."""
         count = scenario.pile.total_count
         settings = pick_settings(scenario, max_picks=2 * count) if open_loop \
-            else closed_loop_settings(scenario, hanging_parts, max_picks=count)
+            else closed_loop_settings(scenario, max_picks=count)
         return cls(scenario, methods, part, settings)
 
     @property

@@ -105,12 +105,11 @@ def pick_settings(scenario: Scenario, **overrides) -> PickSettings:
                            **overrides})
 
 
-def closed_loop_settings(scenario: Scenario, hanging_parts: float | None = None,
-                         **overrides) -> PickSettings:
+def closed_loop_settings(scenario: Scenario, **overrides) -> PickSettings:
     """:func:`pick_settings` for the closed loop: weigh every lift (the scenario needs a
-    ``wrist`` force/torque sensor and a tray), the lift high enough for a chain of
-    ``hanging_parts`` (default: the scenario's ``pick.hanging_parts``; 0: the approach's
-    fixed lift) of the pile's longest part to be weighed clear of the pile."""
+    ``wrist`` force/torque sensor and a tray), the lift high enough for a chain of the
+    scenario's ``pick.hanging_parts`` (0: the approach's fixed lift) of the pile's longest
+    part to be weighed clear of the pile."""
     missing = [what for what, ok in (("a 'wrist' force/torque sensor",
                                       WRIST in scenario.force_torque_sensors),
                                      ("a 'tray'", scenario.tray is not None)) if not ok]
@@ -118,9 +117,8 @@ def closed_loop_settings(scenario: Scenario, hanging_parts: float | None = None,
         raise TangleDrakeError(f"closed-loop picking needs {' and '.join(missing)} in the "
                                "scenario (as pick_demo.yaml has); without, pick open loop "
                                "(--open-loop, or 'pick: {closed_loop: false}' in it)")
-    if hanging_parts is None:
-        hanging_parts = scenario.pick.hanging_parts
-    recovery = RecoverySettings(hanging_length=hanging_parts * part_span(scenario.pile))
+    recovery = RecoverySettings(
+        hanging_length=scenario.pick.hanging_parts * part_span(scenario.pile))
     return pick_settings(scenario, **{"recovery": recovery, **overrides})
 
 
