@@ -120,8 +120,7 @@ def plan(options: BenchOptions) -> tuple[BenchConfig, int, list[str]]:
         raise TangleDrakeError(f"unknown --mode {options.mode!r}; choose {' or '.join(MODES)}")
     source = scenario_source(options.scenario).with_default(
         MODE_SCENARIOS[options.mode or "floating"])
-    text = source.text()
-    scenario = source.load()  # a clear error now, not in every worker
+    text, scenario = source.read()  # a clear error now, not in every worker
     path = source.name
     if scenario.pile.total_count == 0 and not options.quick:
         raise TangleDrakeError(f"{path}: the scenario's pile has no parts: there is nothing "

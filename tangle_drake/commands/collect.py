@@ -117,13 +117,11 @@ def settings_from_args(args: argparse.Namespace):
 
 
 def _scenario_text(args: argparse.Namespace, default: str | None = None) -> str:
-    """The scenario's text: its files and overlays; no file: the shipped ``default``
-    (tangle_data.yaml)."""
+    """The scenario's text, checked (a wrong field is named now, with the overlay that names
+    it): its files and overlays; no file: the shipped ``default`` (tangle_data.yaml)."""
     from tangle_drake.tangle_data.collect import DATA_SCENARIO
 
-    source = scenario_from(args).with_default(default or DATA_SCENARIO)
-    source.load()  # a wrong field is named now, with the overlay that names it
-    return source.text()
+    return scenario_from(args).with_default(default or DATA_SCENARIO).text()
 
 
 def pick_settings_from_args(args: argparse.Namespace):

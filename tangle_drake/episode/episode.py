@@ -26,7 +26,7 @@ moving the grasp a tenth of a millimetre did not (``docs/data-and-training.md``,
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -151,7 +151,7 @@ class Episode:
         model's physics or, given ``physics``, under that draw (the restored context brings
         the model's back for the next pick)."""
         episode = self.episode
-        diagram, station = episode.pick.diagram, episode.pick.station
+        station = episode.pick.station
         depth = []
         locked = station.pile_bodies if self.lock_until_descent else []
         if physics is not None:
@@ -160,7 +160,6 @@ class Episode:
         def prepare(context: Context) -> None:
             if physics is not None:
                 self._contacts.apply(context, physics.friction, physics.pad_stiffness)
-            diagram.GetInputPort("method").FixValue(context, run)
             depth.append(station.GetOutputPort("camera.depth_image").Eval(
                 station.GetMyContextFromRoot(context)))
             for body in locked:
@@ -176,7 +175,7 @@ class Episode:
                     self._freeze_out_of_reach()
             return self.update_period if locked else _POLL
 
-        episode.start(state, prepare)
+        self.start(state, run, prepare)
         try:
             result = episode.run(self.sim_limit, step=step,
                                  pause_at=Mode.LIFT if self.fast else None)
@@ -189,12 +188,18 @@ class Episode:
         record = result.records[0] if result.records else None
         return PhysicalPick(record, result.time, self._image(depth))
 
-    def start(self, state: np.ndarray, run: MethodRun) -> None:
+    def start(self, state: np.ndarray, run: MethodRun,
+              prepare: Callable[[Context], None] | None = None) -> None:
         """Restore the settled plant ``state`` into the diagram's initial state, selecting as
-        ``run`` says."""
+        ``run`` says; ``prepare`` may set more before the diagram initializes."""
         diagram = self.episode.pick.diagram
-        self.episode.start(state, lambda context: diagram.GetInputPort("method").FixValue(
-            context, run))
+
+        def select(context: Context) -> None:
+            diagram.GetInputPort("method").FixValue(context, run)
+            if prepare is not None:
+                prepare(context)
+
+        self.episode.start(state, select)
 
     def run(self, state: np.ndarray, run: MethodRun, time_limit: float,
             **options) -> PickRun:

@@ -12,7 +12,6 @@ import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import yaml
 from pydrake.common.yaml import yaml_load_typed
 from pydrake.lcm import DrakeLcmParams
 from pydrake.multibody.parsing import (
@@ -34,7 +33,7 @@ from tangle_drake.scenario.drivers import (
     camera_channel,
 )
 from tangle_drake.scenario.hardware import HardwareConfig, check_lcm_url, default_lcm_buses
-from tangle_drake.scenario.yaml_io import Tagged, TaggedLoader, find_bad_field, one_line
+from tangle_drake.scenario.yaml_io import Tagged, find_bad_field, read_mapping
 
 
 def _default_plant_config() -> MultibodyPlantConfig:
@@ -290,14 +289,7 @@ def load_scenario(path: str | Path) -> Scenario:
 
 def parse_scenario(text: str, source: str = "<string>") -> Scenario:
     """Parse scenario YAML text (see :func:`load_scenario`)."""
-    try:
-        raw = yaml.load(text, Loader=TaggedLoader)
-    except yaml.YAMLError as error:
-        raise TangleDrakeError(f"{source} is not valid YAML: {one_line(error)}") from error
-    if raw is None:
-        raw = {}
-    if not isinstance(raw, dict):
-        raise TangleDrakeError(f"{source}: a scenario must be a mapping of fields")
+    raw = read_mapping(text, source)
     _check_driver_tags(raw.get("model_drivers"), source)
     try:
         scenario = yaml_load_typed(schema=Scenario, data=text, defaults=Scenario())

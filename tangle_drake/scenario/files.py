@@ -10,12 +10,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import yaml
-
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import diagrams_dir
 from tangle_drake.scenario import Scenario, load_scenario, parse_scenario
-from tangle_drake.scenario.yaml_io import TaggedLoader, dump, merge, one_line
+from tangle_drake.scenario.yaml_io import dump, merge, read_mapping
 
 DEFAULT_SCENARIO_NAME = "pick_demo.yaml"
 
@@ -59,10 +57,6 @@ class ScenarioSource:
         return self.files or (Path(self.default),)
 
     @property
-    def overlays(self) -> int:
-        return len(self.given) - 1 + len(self.texts)
-
-    @property
     def name(self) -> str:
         """The scenario as errors and reports name it: its files and overlays, as given."""
         return " + ".join([str(path) for path in self.given] + [TEXT_SOURCE] * len(self.texts))
@@ -79,34 +73,38 @@ class ScenarioSource:
                     f"cannot read scenario file {path}: {error.strerror}") from error
         return documents + [(TEXT_SOURCE, text) for text in self.texts]
 
-    def text(self) -> str:
-        """The scenario's YAML text: a single file's own text (so its digest is the file's),
-        else the documents merged into one."""
+    def read(self) -> tuple[str, Scenario]:
+        """The scenario's YAML text (a single file's own text, so its digest is the file's;
+        else the documents merged into one) and the validated scenario. A field an overlay
+        names wrongly is refused with the overlay's name and the field's."""
         documents = self.documents()
         if len(documents) == 1:
-            return documents[0][1]
+            name, text = documents[0]
+            return text, parse_scenario(text, source=name)
+        mappings = [(name, read_mapping(text, name)) for name, text in documents]
         merged: object = {}
-        for name, text in documents:
-            merged = merge(merged, _mapping(name, text))
-        return dump(merged)
-
-    def load(self) -> Scenario:
-        """The validated scenario; a field an overlay names wrongly is refused with the
-        overlay's name and the field's."""
-        documents = self.documents()
-        if len(documents) == 1:
-            return parse_scenario(documents[0][1], source=documents[0][0])
+        for _, mapping in mappings:
+            merged = merge(merged, mapping)
+        text = dump(merged)
         try:
-            return parse_scenario(self.text(), source=self.name)
+            return text, parse_scenario(text, source=self.name)
         except TangleDrakeError as error:
             field = re.search(r"scenario field '([^']+)'", str(error))
-            named = [name for name, text in documents
-                     if field and _names_field(_mapping(name, text), field.group(1))]
+            named = [name for name, mapping in mappings
+                     if field and _names_field(mapping, field.group(1))]
             if not named:
                 raise
             detail = str(error).removeprefix(f"{self.name}: ")
             raise TangleDrakeError(f"{named[-1]} (overlaid on {documents[0][0]}): "
                                    f"{detail}") from error
+
+    def text(self) -> str:
+        """The scenario's YAML text, checked (:meth:`read`)."""
+        return self.read()[0]
+
+    def load(self) -> Scenario:
+        """The validated scenario (:meth:`read`)."""
+        return self.read()[1]
 
 
 def scenario_source(files: ScenarioSource | Sequence[str | Path] | str | Path | None = None,
@@ -120,18 +118,6 @@ def scenario_source(files: ScenarioSource | Sequence[str | Path] | str | Path | 
     elif isinstance(files, str | Path):
         files = (files,)
     return ScenarioSource(tuple(Path(path) for path in files), tuple(texts))
-
-
-def _mapping(name: str, text: str) -> dict:
-    try:
-        raw = yaml.load(text, Loader=TaggedLoader)
-    except yaml.YAMLError as error:
-        raise TangleDrakeError(f"{name} is not valid YAML: {one_line(error)}") from error
-    if raw is None:
-        return {}
-    if not isinstance(raw, dict):
-        raise TangleDrakeError(f"{name}: a scenario must be a mapping of fields")
-    return raw
 
 
 def _names_field(raw: object, field: str) -> bool:

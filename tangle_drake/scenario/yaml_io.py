@@ -8,6 +8,8 @@ import typing
 import yaml
 from pydrake.common.yaml import yaml_load_typed
 
+from tangle_drake.errors import TangleDrakeError
+
 
 class Tagged(typing.NamedTuple):
     """A YAML node with a type tag (e.g. ``!FovDegrees``), kept so it can be written back."""
@@ -63,6 +65,20 @@ def one_line(error: yaml.YAMLError) -> str:
     if isinstance(error, yaml.MarkedYAMLError) and error.problem_mark is not None:
         return f"line {error.problem_mark.line + 1}: {error.problem}"
     return str(error).replace("\n", " ")
+
+
+def read_mapping(text: str, source: str) -> dict:
+    """A scenario document's fields, tags kept (an empty document has none); what is not
+    YAML, or not a mapping, is refused naming ``source``."""
+    try:
+        raw = yaml.load(text, Loader=TaggedLoader)
+    except yaml.YAMLError as error:
+        raise TangleDrakeError(f"{source} is not valid YAML: {one_line(error)}") from error
+    if raw is None:
+        return {}
+    if not isinstance(raw, dict):
+        raise TangleDrakeError(f"{source}: a scenario must be a mapping of fields")
+    return raw
 
 
 def find_bad_field(schema: type, raw: object, prefix: str) -> str:
