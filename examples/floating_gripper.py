@@ -32,6 +32,7 @@ from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import BinConfig, PartCount, PileConfig, Scenario
 from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.selection.choice import resolve_tangle_choice
+from tangle_drake.selection.methods import fixed_selection
 from tangle_drake.station import build_station
 
 
@@ -60,8 +61,9 @@ def run(picks: int = 2, parts: int = 6, seed: int = 0, model: str | None = None,
     station = build_station(scenario)
     pile = settle_pile(station, scenario, seed)  # the gantry parked at home
 
-    pick = build_pick_diagram(scenario, choice, motion_for(scenario), station=station,
-                              settings=pick_settings(scenario, max_picks=picks), seed=seed)
+    pick = build_pick_diagram(scenario, motion_for(scenario),
+                              fixed_selection(choice, scenario, seed), station=station,
+                              settings=pick_settings(scenario, max_picks=picks))
     episode = PickEpisode(pick)
     episode.start(pile.state)
     run = episode.run(30.0 * picks, on_pick=lambda record: print(record.describe()))

@@ -30,7 +30,7 @@ from tangle_drake.errors import TangleDrakeError
 from tangle_drake.failures import FailureKind
 from tangle_drake.paths import diagrams_dir, shown_path
 from tangle_drake.pick.modes import Mode
-from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, classify_lift
+from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, TrueCount, classify_lift
 from tangle_drake.pile import PileSettler
 from tangle_drake.scenario import BinConfig, PartCount
 from tangle_drake.scenario.files import resolve_scenario, scenario_source
@@ -104,7 +104,7 @@ def test_a_lift_is_judged_by_the_fingers_then_by_the_count():
 
 @pytest.mark.parametrize(("record", "expected"), [
     (PickRecord(1, Outcome.ONE), ("success", None)),
-    (PickRecord(1, Outcome.SEVERAL, lifted=2), ("tangled", None)),
+    (PickRecord(1, Outcome.SEVERAL, truth=TrueCount(lifted=2)), ("tangled", None)),
     (PickRecord(1, Outcome.NONE), ("empty", None)),
     (None, ("failure", "timeout")),
     *[(PickRecord(1, failure=kind, reason="(words only for people)"), ("failure", kind.value))
@@ -145,7 +145,7 @@ def test_hand_made_end_states_count_the_parts_hanging_from_the_gripper():
         lifted = monitor.lifted_parts(monitor_context)
         width = 0.003 if lifted else 0.0005  # fingers on a wire, or closed on nothing
         outcome = classify_lift(width, len(lifted), 0.25 * 0.006)
-        return classify(PickRecord(1, outcome, lifted=len(lifted)))[0]
+        return classify(PickRecord(1, outcome, truth=TrueCount(lifted=len(lifted))))[0]
 
     assert end_state(hanging, in_bin, in_bin) == "success"
     assert end_state(hanging, hanging, in_bin) == "tangled"

@@ -216,7 +216,7 @@ def test_the_demo_picks_one_part_through_the_hardware_interface():
     # pick (no safety stop) whose outcome the controller read from the gripper's measured
     # width alone (the hardware station has no simulation-only ports).
     assert record.outcome is not Outcome.FAILED, record.describe()
-    assert record.lifted is None
+    assert record.truth.lifted is None
     assert (record.outcome is Outcome.NONE) == (record.width < pick_settings(scenario).empty_width)
     assert any("over memq://" in line for line in lines), lines
     assert "parts in the bin" in lines[-1]
@@ -236,7 +236,7 @@ def test_the_closed_loop_weighs_over_lcm_with_the_same_diagram(tmp_path):
                                    hardware=True, with_hardware_sim=True,
                                    log_picks=tmp_path / "log", pictures=tmp_path / "pictures"),
                        lambda _: None)
-    assert all(r.lifted is None for r in records)  # no simulation-only count
+    assert all(r.truth.lifted is None for r in records)  # no simulation-only count
     assert records[-1].disposition is Disposition.DELIVERED, [r.describe() for r in records]
     assert records[-1].estimate.count == 1 and records[-1].outcome.value == "one part"
     logged = load_samples(tmp_path / "log", ("label", "outcome", "sim_lifted", "pile_seed"))

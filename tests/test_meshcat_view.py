@@ -194,6 +194,7 @@ def test_the_replay_shows_pick_2s_candidates_not_pick_1s_at_pick_2s_time(tmp_pat
         return float(chosen.mean())
 
     for now, other in ((first, second), (second, first)):
-        picture = _screenshot(html, now.started_at + 0.1, tmp_path / f"pick_{now.index}.png")
+        picture = _screenshot(html, now.timing.started_at + 0.1,
+                              tmp_path / f"pick_{now.index}.png")
         assert green_near(picture, now) > 0.005, now.index
         assert green_near(picture, other) == 0.0, now.index

@@ -302,6 +302,7 @@ def test_a_simulated_closed_loop_pick_is_weighed_and_delivered_to_the_tray():
     from tangle_drake.scenario import PartCount
     from tangle_drake.scenario.files import resolve_scenario
     from tangle_drake.selection.choice import TangleChoice
+    from tangle_drake.selection.methods import fixed_selection
     from tangle_drake.station import build_station
 
     scenario = resolve_scenario("floating_gripper.yaml")
@@ -309,8 +310,9 @@ def test_a_simulated_closed_loop_pick_is_weighed_and_delivered_to_the_tray():
                        pile=replace(scenario.pile, parts=[PartCount("u_hook", 6)]))
     station = build_station(scenario)
     pile = settle_pile(station, scenario, seed=1)
-    pick = build_pick_diagram(scenario, TangleChoice(None, "graspability"),
-                              motion_for(scenario), station=station,
+    selection = fixed_selection(TangleChoice(None, "graspability"), scenario)
+    pick = build_pick_diagram(scenario, motion_for(scenario), selection,
+                              station=station,
                               settings=closed_loop_settings(scenario, max_picks=1))
     episode = PickEpisode(pick)
     episode.start(pile.state)
@@ -318,7 +320,7 @@ def test_a_simulated_closed_loop_pick_is_weighed_and_delivered_to_the_tray():
     delivered = [r for r in run.records if r.disposition is Disposition.DELIVERED]
     assert run.end.value == "done" and len(delivered) == 1
     record = delivered[0]
-    assert record.lifted == 1 and record.estimate.count == 1 and record.estimate.trusted
+    assert record.truth.lifted == 1 and record.estimate.count == 1 and record.estimate.trusted
     tray = pick.tray.GetOutputPort("tray_count").Eval(
         pick.tray.GetMyContextFromRoot(episode.simulator.get_context()))
     assert tray[0] == 1  # the simulation's count, not the estimator's

@@ -12,14 +12,16 @@ from tangle_drake.pick.truth import PickTruth
 from tangle_drake.planning.arm_motion import ArmMotion
 from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.selection.choice import TangleChoice
+from tangle_drake.selection.methods import fixed_selection
 from tangle_drake.station import build_station
 
 
 def test_the_pick_diagram_wires_to_the_hardware_station_without_the_monitor():
     scenario = resolve_scenario(None)
     station = build_station(scenario, hardware=True)  # in-process LCM (memq://)
-    pick = build_pick_diagram(scenario, TangleChoice(None, "graspability"),
-                              ArmMotion(scenario.bin), station=station)
+    selection = fixed_selection(TangleChoice(None, "graspability"), scenario)
+    pick = build_pick_diagram(scenario, ArmMotion(scenario.bin), selection,
+                              station=station)
     assert pick.monitor is None and pick.truth is None
     assert not pick.diagram.HasOutputPort("truth")
 
@@ -48,8 +50,9 @@ def test_no_planner_input_is_fed_by_the_simulations_truth():
     """Controllers never see the simulation's truth: nothing upstream of the planner is a
     ``sim.*`` port or a truth monitor, while the monitors are there beside it."""
     scenario = resolve_scenario(None)
-    pick = build_pick_diagram(scenario, TangleChoice(None, "graspability"),
-                              ArmMotion(scenario.bin), settings=closed_loop_settings(scenario))
+    selection = fixed_selection(TangleChoice(None, "graspability"), scenario)
+    pick = build_pick_diagram(scenario, ArmMotion(scenario.bin), selection,
+                              settings=closed_loop_settings(scenario))
     feeding = upstream(pick.diagram, pick.planner)
     assert any(name == "camera.depth_image" for _, name in feeding)  # it does see the camera
     assert not [name for source, name in feeding if isinstance(source, TRUTH)

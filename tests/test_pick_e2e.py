@@ -25,12 +25,12 @@ def test_one_pick_end_to_end(tmp_path):
     record = records[0]
     assert record.outcome is not Outcome.FAILED, record.reason
     assert record.candidate is not None and record.candidate.pose is not None
-    assert record.lifted is not None  # the simulation's monitor was connected
+    assert record.truth.lifted is not None  # the simulation's monitor was connected
     # The gripper's own check and the monitor agree on whether something came up.
-    assert (record.outcome is Outcome.NONE) == (record.width < 0.0015 or record.lifted == 0)
-    assert 5.0 < record.execution_s < 30.0 and record.planning_s < 5.0
+    assert (record.outcome is Outcome.NONE) == (record.width < 0.0015 or record.truth.lifted == 0)
+    assert 5.0 < record.timing.execution_s < 30.0 and record.timing.planning_s < 5.0
     assert lines[-1].startswith("1 pick(s): ")
-    left = 6 - (record.lifted if record.outcome is not Outcome.NONE else 0)
+    left = 6 - (record.truth.lifted if record.outcome is not Outcome.NONE else 0)
     # Released outside the bin: into the tray, where the last line counts it.
     assert f"; now {left} of 6 parts in the bin, {6 - left} in the tray" in lines[-1]
     pick_line = next(line for line in lines if line.startswith("pick 1: "))
@@ -59,6 +59,6 @@ def test_the_closed_loop_demo_weighs_and_delivers_one_part_into_the_tray():
                        say=lines.append)
     delivered = [r for r in records if r.disposition is Disposition.DELIVERED]
     assert len(delivered) == 1 and delivered[0].estimate.count == 1
-    assert delivered[0].lifted == 1  # the simulation agrees with the scale
+    assert delivered[0].truth.lifted == 1  # the simulation agrees with the scale
     assert all(r.estimate is not None or r.disposition is Disposition.EMPTY for r in records)
     assert "1 in the tray" in lines[-1] and "delivered" in lines[-1]

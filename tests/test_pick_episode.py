@@ -12,6 +12,7 @@ from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount
 from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.selection.choice import TangleChoice
+from tangle_drake.selection.methods import fixed_selection
 from tangle_drake.station import build_station
 
 
@@ -22,8 +23,9 @@ def rig():
                        pile=replace(scenario.pile, parts=[PartCount("u_hook", 4)]))
     station = build_station(scenario)
     pile = settle_pile(station, scenario, seed=3)
-    pick = build_pick_diagram(scenario, TangleChoice(None, "graspability"),
-                              motion_for(scenario, return_home=False), station=station,
+    selection = fixed_selection(TangleChoice(None, "graspability"), scenario)
+    pick = build_pick_diagram(scenario, motion_for(scenario, return_home=False),
+                              selection, station=station,
                               settings=pick_settings(scenario, max_picks=1))
     return scenario, pile, PickEpisode(pick)
 
@@ -47,7 +49,7 @@ def test_the_episode_restarts_from_the_pile_and_repeats_the_pick(rig):
         assert run.end is RunEnd.DONE and len(run.records) == 1
         record = run.records[0]
         results.append((record.outcome, record.candidate.u, record.candidate.v, record.width,
-                        record.lifted, run.time))
+                        record.truth.lifted, run.time))
     assert results[0] == results[1]
     assert [r.index for r in seen] == [1, 1]  # each pick reported once, as it ended
 

@@ -35,5 +35,5 @@ def test_the_floating_gripper_picks_with_the_shared_state_machine(tmp_path, caps
     record = records[0]
     assert record.outcome is not Outcome.FAILED, record.reason
     assert record.p_model is not None  # the CNN scored the candidates
-    assert record.lifted is not None
+    assert record.truth.lifted is not None
     assert "1 pick(s): " in capsys.readouterr().out

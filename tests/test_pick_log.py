@@ -39,8 +39,8 @@ def test_each_weighed_grasp_is_logged_with_its_weighing_as_the_label(tmp_path):
         assert samples["outcome"][row] == OUTCOME_CODES[record.verdict]
         assert samples["label"][row] == {2: 1, 1: 0}.get(int(samples["outcome"][row]), -1)
         assert samples["weighed_parts"][row] == pytest.approx(record.estimate.parts)
-        assert samples["sim_lifted"][row] == record.lifted
-        assert samples["sim_held"][row] == record.held
+        assert samples["sim_lifted"][row] == record.truth.lifted
+        assert samples["sim_held"][row] == record.truth.held
         assert (samples["u"][row], samples["v"][row]) == pytest.approx(
             (record.candidate.u, record.candidate.v))
         np.testing.assert_array_equal(samples["crop"][row], record.crop)

@@ -190,9 +190,11 @@ def test_a_pick_passes_every_mode_in_order_and_looks_once_per_pick():
     assert [r.outcome for r in records] == [Outcome.ONE, Outcome.ONE]
     assert source.calls == 2  # perception ran only when perceiving
     record = records[0]
-    assert record.rank == 0 and record.width == pytest.approx(0.003) and record.lifted == 1
-    assert record.execution_s > 0 and record.planning_s > 0
-    assert records[1].started_at > record.started_at + record.execution_s > 0  # in turn
+    assert record.rank == 0 and record.width == pytest.approx(0.003)
+    assert record.truth.lifted == 1
+    first, second = record.timing, records[1].timing
+    assert first.execution_s > 0 and first.planning_s > 0
+    assert second.started_at > first.started_at + first.execution_s > 0  # in turn
     assert summarize(records) == "2 pick(s): 2 one part"
 
 
@@ -231,8 +233,8 @@ def test_a_camera_that_lags_delays_the_look_until_its_image_shows_the_arm_stoppe
     late, _, _, lagging = run([candidate(0, 0.9)], lifted=1, picks=2, camera=Camera(lag=0.5))
     assert [r.outcome for r in late] == [Outcome.ONE, Outcome.ONE]
     # (the same to one planner tick, which the later start may round the other way)
-    assert [r.execution_s for r in late] == pytest.approx([r.execution_s for r in on_time],
-                                                          abs=PickSettings().update_period)
+    assert [r.timing.execution_s for r in late] == pytest.approx(
+        [r.timing.execution_s for r in on_time], abs=PickSettings().update_period)
     # Each look waits for an image that arrived after the arm stopped: 0.5 s after, less the
     # 0.3 s settle the wait overlaps, so each look is 0.2 s later than the one before it.
     delays = np.diff([0.0, *lagging.times]) - np.diff([0.0, *prompt.times])

@@ -4,8 +4,10 @@ wrongly is refused with the overlay's name, and the clearings' overlays give bac
 scenarios their results ran on."""
 
 import hashlib
+import re
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -14,7 +16,11 @@ from pydrake.common.yaml import yaml_dump_typed
 
 from tangle_drake.errors import TangleDrakeError
 from tangle_drake.paths import diagrams_dir
-from tangle_drake.pick.diagram import closed_loop_settings
+from tangle_drake.pick.diagram import (
+    closed_loop_settings,
+    default_graspability_params,
+    payload_settings,
+)
 from tangle_drake.scenario import load_scenario
 from tangle_drake.scenario.files import scenario_source
 from tangle_drake.scenario.yaml_io import Tagged, TaggedLoader
@@ -132,3 +138,34 @@ def test_the_demo_reads_the_scenarios_pick_settings(overlay, refusal, tmp_path):
     refused = subprocess.run(command, capture_output=True, text=True, timeout=120)
     assert refused.returncode == 2 and refusal in refused.stderr, refused.stderr
     assert not (tmp_path / "log").exists()
+
+
+def test_the_scenario_tunes_the_pick_diagrams_systems():
+    """``pick.planner``, ``recovery``, ``payload``, ``graspability``: a value given replaces
+    that one setting; what is left out stays the system's default or what the pile gives."""
+    base = scenario_source("pick_demo.yaml").load()
+    tuned = scenario_source("pick_demo.yaml", [
+        "pick: {planner: {close_delay: 0.5}, recovery: {max_shakes: 3},"
+        " payload: {min_confidence: 0.95}, graspability: {top_k: 7}}"]).load()
+    before, after = closed_loop_settings(base), closed_loop_settings(tuned)
+    assert after == replace(before, close_delay=0.5,
+                            recovery=replace(before.recovery, max_shakes=3))
+    assert payload_settings(tuned) == replace(payload_settings(base), min_confidence=0.95)
+    assert default_graspability_params(tuned) == replace(default_graspability_params(base),
+                                                         top_k=7)
+    assert after.empty_width == before.empty_width < 0.006  # still the pile's wire's
+
+
+@pytest.mark.parametrize(("overlay", "refusal"), [
+    ("pick: {recovery: {max_shakess: 2}}", "'pick.recovery.max_shakess'"),
+    ("pick: {planner: {close_time: -1}}", "'pick.planner.close_time' must be >= 0"),
+])
+def test_a_wrong_tuning_is_refused_naming_it(overlay, refusal):
+    with pytest.raises(TangleDrakeError, match=re.escape(refusal)):
+        scenario_source("pick_demo.yaml", [overlay]).load()
+
+
+def test_a_tuning_its_system_refuses_is_refused_naming_the_field():
+    scenario = scenario_source("pick_demo.yaml", ["pick: {payload: {min_confidence: 1.5}}"]).load()
+    with pytest.raises(TangleDrakeError, match=r"scenario field 'pick\.payload': .*min_confidence"):
+        payload_settings(scenario)

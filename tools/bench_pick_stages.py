@@ -65,8 +65,9 @@ def main() -> None:
     print(f"{args.scenario}, seed {args.seed}: {len(records)} grasps in "
           f"{time.perf_counter() - start:.0f} s wall")
     for r in records:
-        print(f"grasp {r.index}: perception {1e3 * r.perception_s:6.1f} ms, CNN "
-              f"{1e3 * r.cnn_s:5.1f} ms, planning {1e3 * r.planning_s:6.1f} ms")
+        t = r.timing
+        print(f"grasp {r.index}: perception {1e3 * t.perception_s:6.1f} ms, CNN "
+              f"{1e3 * t.cnn_s:5.1f} ms, planning {1e3 * t.planning_s:6.1f} ms")
     print(f"computations per grasp: graspability {calls['GraspabilitySystem'] / len(records):.1f}"
           f", CNN {calls['TangleCnnSystem'] / len(records):.1f}")
     # A mode lasts until the next is entered; the look (PERCEIVE) is not entered through

@@ -77,8 +77,8 @@ class ClearWorker:
             tray[0] = now
 
         watch = EscapeWatch(pick, rig.scenario.bin, episode.simulator.get_context(), rows)
-        result = rig.run(state, run, SIM_TIME_PER_PART * max(in_bin, 1), on_pick=grasp,
-                         step=watch)
+        rig.start(state, run)
+        result = rig.run(SIM_TIME_PER_PART * max(in_bin, 1), on_pick=grasp, step=watch)
         # Parts still falling into the tray after the last grasp was recorded come to rest.
         episode.simulator.AdvanceTo(episode.simulator.get_context().get_time() + 1.0)
         watch(Mode.DONE)  # the last look: where every part came to rest
@@ -146,13 +146,13 @@ def grasp_row(record: PickRecord, landed: int) -> dict:
     """One grasp of a clearing as plain data: what it did, and what landed in the tray."""
     return {"index": record.index, "outcome": record.outcome.name,
             "failure": None if record.failure is None else record.failure.value,
-            "lifted": record.lifted, "held": record.held, "resting": record.resting,
-            "held_decided": record.held_decided,
+            "lifted": record.truth.lifted, "held": record.truth.held,
+            "resting": record.truth.resting, "held_decided": record.truth.held_decided,
             "weighed": None if record.estimate is None or not record.estimate.ready
             else round(record.estimate.parts, 3),
             "verdict": None if record.verdict is None else record.verdict.name,
             "recoveries": [r.name for r in record.recoveries],
             "disposition": None if record.disposition is None else record.disposition.name,
-            "landed": landed, "execution_s": round(record.execution_s, 3),
-            "compute_s": record.perception_s + record.cnn_s + record.planning_s}
+            "landed": landed, "execution_s": round(record.timing.execution_s, 3),
+            "compute_s": record.timing.compute_s}
 

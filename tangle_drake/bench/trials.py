@@ -175,10 +175,11 @@ def pick_row(method: str, record: PickRecord | None, extra: dict) -> dict:
     if record is not None:
         candidate = record.candidate
         row.update(
-            outcome=record.outcome.name, reason=record.reason, lifted=record.lifted,
+            outcome=record.outcome.name, reason=record.reason, lifted=record.truth.lifted,
             width=record.width, rank=record.rank, p_model=record.p_model,
-            rejected=len(record.rejected), perception_s=record.perception_s,
-            cnn_s=record.cnn_s, planning_s=record.planning_s, execution_s=record.execution_s,
+            rejected=len(record.rejected), **{
+                name: getattr(record.timing, name)
+                for name in ("perception_s", "cnn_s", "planning_s", "execution_s")},
             candidate=None if candidate is None else {
                 "u": float(candidate.u), "v": float(candidate.v),
                 "angle_deg": float(candidate.angle_deg), "score": float(candidate.score)})

@@ -13,27 +13,22 @@ from pathlib import Path
 
 from pydrake.geometry import Meshcat, MeshcatParams
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import Context, Diagram, EventStatus
+from pydrake.systems.framework import Context, EventStatus
 
 from tangle_drake.bin_model import inside_bin
 from tangle_drake.crops import CropSpec
 from tangle_drake.episode.episode import Episode
 from tangle_drake.episode.run import (
     SIM_TIME_PER_PICK,
-    Clock,
     PickRun,
     RunEnd,
-    run_picks,
 )
 from tangle_drake.errors import SafetyStop, TangleDrakeError
 from tangle_drake.graphviz import write_graphviz
 from tangle_drake.gripper import DEFAULT_GRIPPER
-from tangle_drake.hardware.loop import HardwareInTheLoop
-from tangle_drake.lcm_io.buses import network_bus_url
 from tangle_drake.parts import load_part
 from tangle_drake.pick.diagram import (
     PickDiagram,
-    build_pick_diagram,
     closed_loop_settings,
     pick_settings,
     weighing_warning,
@@ -44,7 +39,6 @@ from tangle_drake.pick.pick_log import PickLog, pick_log_identity
 from tangle_drake.pick.pictures import PickPictures
 from tangle_drake.pick.planner import PickSettings
 from tangle_drake.pile import check_pile
-from tangle_drake.planning.motion import Motion
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount, Scenario
 from tangle_drake.scenario.files import ScenarioSource, scenario_source
@@ -52,7 +46,7 @@ from tangle_drake.scenario.hardware import IN_PROCESS_URL
 from tangle_drake.selection.choice import TangleChoice, model_part_notice, resolve_tangle_choice
 from tangle_drake.selection.methods import MethodRun, choice_method
 from tangle_drake.selection.rules import check_rule
-from tangle_drake.station import SimulatedStation, build_station, camera_model
+from tangle_drake.station import SimulatedStation, camera_model
 from tangle_drake.tangle_cnn.model import load_tangle_model
 
 RECORD_FPS = 20.0
@@ -138,7 +132,7 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     if choice.model is not None and (mismatch := model_part_notice(choice.model, part)):
         say(mismatch)
     say(f"selection: rule {choice.rule}" + (f", model {choice.model}" if choice.model else ""))
-    motion = motion_for(scenario)  # before any long work: the scenario must have a robot
+    motion_for(scenario)  # before any long work: the scenario must have a robot
     settings = pick_settings(scenario, max_picks=options.picks) if open_loop \
         else closed_loop_settings(scenario, max_picks=options.picks)
     if not open_loop and (warning := weighing_warning(scenario)):
@@ -147,7 +141,7 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
     settings = replace(settings, record_view=bool(options.meshcat or options.record
                                                   or options.pictures))
     if options.log_picks is None and options.pictures is None:
-        return _run_demo(options, scenario, choice, settings, motion, say, None)
+        return _run_demo(options, scenario, choice, settings, say, None)
     model = load_tangle_model(choice.model) if choice.model else None
     crop = model.crop if model is not None else CropSpec.for_gripper()
     settings = replace(settings, record_crop=crop)
@@ -155,12 +149,12 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
         options.pictures, camera_model(scenario).intrinsics,
         model.normalisation if model is not None else None)
     if options.log_picks is None:
-        return _run_demo(options, scenario, choice, settings, motion, say, None, pictures)
+        return _run_demo(options, scenario, choice, settings, say, None, pictures)
     log = PickLog(options.log_picks, pick_log_identity(part, crop, DEFAULT_GRIPPER))
     for notice in log.notices:
         say(f"notice: {notice}")
     try:
-        return _run_demo(options, scenario, choice, settings, motion, say, log, pictures)
+        return _run_demo(options, scenario, choice, settings, say, log, pictures)
     finally:
         log.close()
         say(f"pick log {log.directory}: {log.logged} grasp(s) added"
@@ -168,10 +162,10 @@ def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[P
 
 
 def _run_demo(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
-              settings: PickSettings, motion: Motion, say: Callable[[str], None],
+              settings: PickSettings, say: Callable[[str], None],
               log: PickLog | None, pictures: PickPictures | None = None) -> list[PickRecord]:
     if options.hardware:
-        return _run_hardware(options, scenario, choice, settings, motion, say, log, pictures)
+        return _run_hardware(options, scenario, choice, settings, say, log, pictures)
 
     meshcat = None
     if options.meshcat or options.record:
@@ -202,7 +196,7 @@ def _run_demo(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
         observers.append(pictures.observer(pick, scenario.view_cameras[0]))
     if observers:
         episode.simulator.set_monitor(lambda root: _observe(observers, root))
-    records = _run(episode.simulator, pick, options.picks, say, in_bin,
+    records = _run(runner, options.picks, say, in_bin,
                    closed=settings.recovery is not None, log=log, pictures=pictures)
     if meshcat is not None and options.record:
         meshcat.StopRecording()
@@ -222,46 +216,29 @@ def _observe(observers: list[Callable[[Context], None]], root: Context) -> Event
 
 
 def _run_hardware(options: DemoOptions, scenario: Scenario, choice: TangleChoice,
-                  settings: PickSettings, motion: Motion, say: Callable[[str], None],
+                  settings: PickSettings, say: Callable[[str], None],
                   log: PickLog | None, pictures: PickPictures | None) -> list[PickRecord]:
-    """The same pick diagram around the hardware station: against the hardware simulator in
-    this process over ``memq://`` (``--with-hardware-sim``), or against the robot's drivers on
-    the scenario's LCM bus, in real time."""
+    """The same pick diagram around the hardware station (:meth:`Episode.on_hardware`)."""
     start = time.perf_counter()
-    built: list[PickDiagram] = []
-
-    def make(station: Diagram) -> Diagram:
-        built.append(build_pick_diagram(scenario, choice, motion, station=station,
-                                        settings=settings, seed=scenario.random_seed))
-        return built[0].diagram
-
-    if options.with_hardware_sim:
-        loop = HardwareInTheLoop(scenario, make, options.seed, progress=say)
+    episode = Episode.on_hardware(scenario, choice_method(choice), settings,
+                                  MethodRun(choice.rule, scenario.random_seed),
+                                  with_hardware_sim=options.with_hardware_sim,
+                                  seed=options.seed, say=say)
+    in_bin = None
+    if (robot := episode.robot) is not None:
         say(f"hardware simulator and controller in this process over {IN_PROCESS_URL}; "
             f"set-up {time.perf_counter() - start:.1f} s; picking {options.picks} part(s)")
-        robot = loop.robot
         in_bin = _bin_count(None, robot.simulator, scenario, robot.pile.num_in_bin,
                             robot.station)
         if log is not None:
             log.pile_seed = robot.pile.seed
-        records = _run(loop, built[0], options.picks, say, in_bin,
-                       closed=settings.recovery is not None, log=log, pictures=pictures)
-        say(f"{summarize(records)}; now {in_bin()}; "
-            f"wall time {time.perf_counter() - start:.0f} s")
-        return records
-
-    url = network_bus_url(scenario, "use --with-hardware-sim to run against the hardware "
-                                    "simulator in this process")
-    station = build_station(scenario, hardware=True)
-    simulator = Simulator(make(station))
-    simulator.set_target_realtime_rate(1.0)
-    say(f"waiting for the robot on {url} ...")
-    station.initialize(simulator)
-    say(f"robot connected; picking {options.picks} part(s)")
-    records = _run(simulator, built[0], options.picks, say,
-                   closed=settings.recovery is not None, log=log, pictures=pictures,
-                   poll=HARDWARE_POLL)
-    say(f"{summarize(records)}; wall time {time.perf_counter() - start:.0f} s")
+    else:
+        say(f"robot connected; picking {options.picks} part(s)")
+    records = _run(episode, options.picks, say, in_bin, closed=settings.recovery is not None,
+                   log=log, pictures=pictures,
+                   poll=None if episode.robot is not None else HARDWARE_POLL)
+    say(f"{summarize(records)}; " + ("" if in_bin is None else f"now {in_bin()}; ")
+        + f"wall time {time.perf_counter() - start:.0f} s")
     return records
 
 
@@ -289,7 +266,7 @@ def _bin_count(pick: PickDiagram | None, simulator: Simulator, scenario: Scenari
     return count
 
 
-def _run(clock: Clock, pick: PickDiagram, picks: int, say: Callable[[str], None],
+def _run(episode: Episode, picks: int, say: Callable[[str], None],
          in_bin: Callable[[], str] | None = None, closed: bool = False,
          log: PickLog | None = None, pictures: PickPictures | None = None,
          poll: float | None = None) -> list[PickRecord]:
@@ -305,8 +282,8 @@ def _run(clock: Clock, pick: PickDiagram, picks: int, say: Callable[[str], None]
         if pictures is not None:
             pictures.add(record)
 
-    run: PickRun = run_picks(clock, pick, limit, on_pick=finished,
-                             step=None if poll is None else lambda _: poll)
+    run: PickRun = episode.run(limit, on_pick=finished,
+                               step=None if poll is None else lambda _: poll)
     if run.end is RunEnd.STOPPED:
         raise SafetyStop(f"safety stop after {len(run.records)} pick(s): "
                                f"{run.safety_message}; the robot holds where it is. Fix the "

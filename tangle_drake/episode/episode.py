@@ -1,8 +1,9 @@
 """One episode shape for every simulated run of a scenario: a part's pile settler and pick
 diagram, built once and run pile after pile. The demo, the benchmark's single picks and its
 clearings, the physical-pick data and the tools all go through :class:`Episode`; what differs
-between them is the planner's settings and the speed-ups, options of the episode (the
-hardware-in-the-loop run builds its pick diagram around the hardware station instead).
+between them is the planner's settings and the speed-ups, options of the episode. On
+hardware (:meth:`Episode.on_hardware`) the same pick diagram is built around the hardware
+station and run against the robot's drivers, or the hardware simulator in this process.
 
 Each run restores a settled plant state into the diagram and runs it from the diagram's
 initial state, so it depends on its pile alone (:class:`~.run.PickEpisode`). A single pick
@@ -31,26 +32,31 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from pydrake.geometry import Meshcat
-from pydrake.systems.framework import Context
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import Context, Diagram
 
 from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.episode.run import SIM_TIME_PER_PICK, PickEpisode, PickRun, RunEnd
-from tangle_drake.parts import load_part
-from tangle_drake.pick.diagram import (
-    PickDiagram,
-    build_pick_diagram,
-    closed_loop_settings,
-    pick_settings,
+from tangle_drake.episode.run import (
+    SIM_TIME_PER_PICK,
+    Clock,
+    PickEpisode,
+    PickRun,
+    RunEnd,
+    run_picks,
 )
+from tangle_drake.hardware.hardware_sim import HardwareSim
+from tangle_drake.hardware.loop import HardwareInTheLoop
+from tangle_drake.lcm_io.buses import network_bus_url
+from tangle_drake.parts import load_part
+from tangle_drake.pick.diagram import build_pick_diagram, closed_loop_settings, pick_settings
 from tangle_drake.pick.outcome import Outcome, PickRecord, classify_lift
 from tangle_drake.pick.planner import Mode, PickSettings
 from tangle_drake.pile import PileSettler, SettledPile
 from tangle_drake.pile_freeze import FREEZE_BEYOND_RADII, PileFreeze, parts_beyond
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import Scenario
-from tangle_drake.selection.choice import FALLBACK_RULE, TangleChoice
 from tangle_drake.selection.methods import Method, MethodRun, selection_wiring
-from tangle_drake.station import build_station, camera_model
+from tangle_drake.station import SimulatedStation, build_station, camera_model
 from tangle_drake.station.perturb import ContactScaler, PickPhysics
 
 FLOATING_SIM_LIMIT = 20.0
@@ -83,27 +89,33 @@ class Episode:
     physical-pick data's shortcuts (see the module docstring; single picks only).
     """
 
-    def __init__(self, scenario: Scenario, methods: Sequence[Method], part: str,
-                 settings: PickSettings, *, return_home: bool = True,
+    def __init__(self, scenario: Scenario, methods: Sequence[Method], part: str | None,
+                 settings: PickSettings, *, station: Diagram | None = None,
+                 fixed: MethodRun | None = None, return_home: bool = True,
                  lock_until_descent: bool = False, fast: bool = False,
                  sim_limit: float = SIM_TIME_PER_PICK, meshcat: Meshcat | None = None) -> None:
+        station = station or build_station(scenario, meshcat)
         pick = build_pick_diagram(
-            scenario, TangleChoice(None, FALLBACK_RULE),
-            motion_for(scenario, return_home=return_home),
-            station=build_station(scenario, meshcat), settings=settings,
-            selection=selection_wiring(methods, part, scenario))
+            scenario, motion_for(scenario, return_home=return_home),
+            selection_wiring(methods, part, scenario, fixed), station=station,
+            settings=settings)
         self.scenario = scenario
+        self.pick_diagram = pick
+        self.robot: HardwareSim | None = None
+        """With the hardware simulator in this process (:meth:`on_hardware`): the robot side."""
+        self.methods = {m.name: m for m in methods}
+        if not isinstance(station, SimulatedStation):
+            return  # on hardware: :meth:`on_hardware` sets the clock
         self.settler = PileSettler(build_station(scenario, meshcat), scenario)
         self.episode = PickEpisode(pick)
+        self.clock: Clock = self.episode.simulator
         self.sim_limit = sim_limit
         self.update_period = settings.update_period
         """The planner's: while the pile is locked, the driver looks at every update."""
         self.lock_until_descent = lock_until_descent
         self.fast = fast
         self.empty_width = settings.empty_width
-        self.methods = {m.name: m for m in methods}
         self.intrinsics: CameraIntrinsics = camera_model(scenario).intrinsics
-        station = self.episode.pick.station
         self._contacts = ContactScaler(station.plant, station.scene_graph)
         self._bin = scenario.bin
         self._freeze = PileFreeze(station.plant, station.scene_graph, station.pile_bodies)
@@ -111,6 +123,37 @@ class Episode:
             load_part(entry.part, mesh_scale=entry.mesh_scale).bounding_radius
             for entry in scenario.pile.parts)
         """Parts whose centre lies farther than this from the grasp stay frozen (``fast``), m."""
+
+    @classmethod
+    def on_hardware(cls, scenario: Scenario, method: Method, settings: PickSettings,
+                    run: MethodRun, *, with_hardware_sim: bool, seed: int | None = None,
+                    say: Callable[[str], None] = print) -> Episode:
+        """The pick diagram around the hardware station, selecting as ``run`` says: against
+        the hardware simulator in this process over ``memq://`` (``with_hardware_sim``, its
+        pile made with ``seed``), or against the robot's drivers on the scenario's LCM bus in
+        real time (this waits for the robot's first messages). Run it with :meth:`run`."""
+        if with_hardware_sim:
+            built: list[Episode] = []
+
+            def make(station: Diagram) -> Diagram:
+                built.append(cls(scenario, [method], None, settings, station=station,
+                                 fixed=run))
+                return built[0].pick_diagram.diagram
+
+            loop = HardwareInTheLoop(scenario, make, seed, progress=say)
+            episode = built[0]
+            episode.clock, episode.robot = loop, loop.robot
+            return episode
+        url = network_bus_url(scenario, "use --with-hardware-sim to run against the hardware "
+                                        "simulator in this process")
+        station = build_station(scenario, hardware=True)
+        episode = cls(scenario, [method], None, settings, station=station, fixed=run)
+        simulator = Simulator(episode.pick_diagram.diagram)
+        simulator.set_target_realtime_rate(1.0)
+        say(f"waiting for the robot on {url} ...")
+        station.initialize(simulator)
+        episode.clock = simulator
+        return episode
 
     @classmethod
     def single_pick(cls, scenario: Scenario, methods: Sequence[Method], part: str,
@@ -136,10 +179,6 @@ class Episode:
         settings = pick_settings(scenario, max_picks=2 * count) if open_loop \
             else closed_loop_settings(scenario, max_picks=count)
         return cls(scenario, methods, part, settings)
-
-    @property
-    def pick_diagram(self) -> PickDiagram:
-        return self.episode.pick
 
     def settle(self, seed: int) -> SettledPile:
         """Drop and settle the pile made with ``seed``."""
@@ -201,13 +240,11 @@ class Episode:
 
         self.episode.start(state, select)
 
-    def run(self, state: np.ndarray, run: MethodRun, time_limit: float,
-            **options) -> PickRun:
-        """:meth:`start`, then run the diagram until its planner is done or ``time_limit``
-        simulated seconds have passed (``options``: as :func:`~.run.run_picks` takes them): a
-        clearing's whole bin."""
-        self.start(state, run)
-        return self.episode.run(time_limit, **options)
+    def run(self, time_limit: float, **options) -> PickRun:
+        """Run the diagram from where it is (after :meth:`start` in simulation) until its
+        planner is done, the safety stops it or ``time_limit`` seconds have passed
+        (``options``: as :func:`~.run.run_picks` takes them)."""
+        return run_picks(self.clock, self.pick_diagram, time_limit, **options)
 
     def _freeze_out_of_reach(self) -> None:
         """Freeze the parts too far from the grasp being made to take part in its lift."""
@@ -230,7 +267,8 @@ class Episode:
             return None
         record = self.episode.pick.diagram.GetOutputPort("current_pick").Eval(context)
         return replace(record, outcome=Outcome.NONE, width=width,
-                       execution_s=context.get_time() - record.started_at)
+                       timing=replace(record.timing, execution_s=context.get_time()
+                                      - record.timing.started_at))
 
     @staticmethod
     def _image(depth: list) -> np.ndarray:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -84,5 +84,5 @@ def choose(record: PickRecord, ranked: list[ScoredCandidate], motion: Motion,
         record.candidate, record.rank = candidate, rank
         record.p_model, record.p_model_name = scored.p_model, scored.p_model_name
         break
-    record.planning_s = time.perf_counter() - start
+    record.timing = replace(record.timing, planning_s=time.perf_counter() - start)
     return plan

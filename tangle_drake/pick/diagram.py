@@ -44,8 +44,7 @@ from tangle_drake.pick.recovery import RecoverySettings
 from tangle_drake.pick.truth import PickTruth
 from tangle_drake.planning.motion import Motion
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
-from tangle_drake.selection.choice import TangleChoice
-from tangle_drake.selection.methods import MethodRun, choice_method, selection_wiring
+from tangle_drake.scenario.pick import tuned
 from tangle_drake.station import SimulatedStation, build_station, camera_model
 
 WRIST = "wrist"
@@ -100,9 +99,11 @@ def thinnest_wire(pile: PileConfig) -> float | None:
 
 def pick_settings(scenario: Scenario, **overrides) -> PickSettings:
     """The planner's settings for the scenario's pile: the empty-grasp width of its thinnest
-    wire (:func:`~tangle_drake.drivers.parallel_jaw.empty_grasp_width`), then ``overrides``."""
-    return PickSettings(**{"empty_width": empty_grasp_width(thinnest_wire(scenario.pile)),
-                           **overrides})
+    wire (:func:`~tangle_drake.drivers.parallel_jaw.empty_grasp_width`), the scenario's
+    ``pick.planner``, then ``overrides``."""
+    settings = tuned(PickSettings(empty_width=empty_grasp_width(thinnest_wire(scenario.pile))),
+                     scenario.pick.planner, "pick.planner")
+    return replace(settings, **overrides)
 
 
 def closed_loop_settings(scenario: Scenario, **overrides) -> PickSettings:
@@ -117,8 +118,9 @@ def closed_loop_settings(scenario: Scenario, **overrides) -> PickSettings:
         raise TangleDrakeError(f"closed-loop picking needs {' and '.join(missing)} in the "
                                "scenario (as pick_demo.yaml has); without, pick open loop "
                                "(--open-loop, or 'pick: {closed_loop: false}' in it)")
-    recovery = RecoverySettings(
-        hanging_length=scenario.pick.hanging_parts * part_span(scenario.pile))
+    recovery = tuned(RecoverySettings(
+        hanging_length=scenario.pick.hanging_parts * part_span(scenario.pile)),
+        scenario.pick.recovery, "pick.recovery")
     return pick_settings(scenario, **{"recovery": recovery, **overrides})
 
 
@@ -130,8 +132,9 @@ the lift, s (descent, close, lift and the waits)."""
 def payload_settings(scenario: Scenario) -> PayloadSettings:
     """How the closed loop's estimator weighs the scenario's pile with its wrist sensor."""
     sensor = scenario.force_torque_sensors[WRIST]
-    return PayloadSettings(part_mass=part_mass(scenario.pile), period=sensor.period,
-                           sensor_noise=max(sensor.force_noise, sensor.force_resolution))
+    return tuned(PayloadSettings(part_mass=part_mass(scenario.pile), period=sensor.period,
+                                 sensor_noise=max(sensor.force_noise, sensor.force_resolution)),
+                 scenario.pick.payload, "pick.payload")
 
 
 def weighing_warning(scenario: Scenario) -> str | None:
@@ -170,7 +173,8 @@ def part_span(pile: PileConfig) -> float:
 
 
 def default_graspability_params(scenario: Scenario) -> GraspabilityParams:
-    """Graspability settings for picking with the real fingers.
+    """Graspability settings for picking with the real fingers, then the scenario's
+    ``pick.graspability``.
 
     The insertion depth is one depth level less than the thinnest wire, so a wire lying alone
     on the bin's floor still has its top above the fingertips' level plus the insertion
@@ -185,23 +189,22 @@ def default_graspability_params(scenario: Scenario) -> GraspabilityParams:
     wire = thinnest_wire(scenario.pile)
     insertion = defaults.insertion_depth_m if wire is None else max(
         defaults.insertion_depth_m, wire - defaults.level_step_m)
-    return replace(defaults, insertion_depth_m=insertion, top_k=2 * defaults.top_k,
-                   max_grip_span_m=FINGER_GRIP_SPAN_M,
-                   roi_margin_px=palm_margin_px(camera_model(scenario), scenario.bin))
+    derived = replace(defaults, insertion_depth_m=insertion, top_k=2 * defaults.top_k,
+                      max_grip_span_m=FINGER_GRIP_SPAN_M,
+                      roi_margin_px=palm_margin_px(camera_model(scenario), scenario.bin))
+    return tuned(derived, scenario.pick.graspability, "pick.graspability")
 
 
-def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion, *,
+def build_pick_diagram(scenario: Scenario, motion: Motion, selection: SelectionWiring, *,
                        station: Diagram | None = None, settings: PickSettings | None = None,
-                       params: GraspabilityParams | None = None, seed: int = 0,
-                       meshcat: Meshcat | None = None,
-                       selection: SelectionWiring | None = None) -> PickDiagram:
+                       meshcat: Meshcat | None = None) -> PickDiagram:
     """Wire the pick diagram around ``station`` (built from ``scenario`` if not given).
 
-    ``choice`` says which rule selects (and with which model, if any): a ``GraspSelector``
-    fixed to it; ``motion`` moves the arm (``ArmMotion`` for the Nextage); ``params`` default
-    to :func:`default_graspability_params`; ``seed`` seeds the ``random`` rule; ``meshcat`` is
-    passed to a station built here. ``selection``, if given, wires a selection of its own
-    between perception and the planner instead (the benchmark's switches methods).
+    ``motion`` moves the arm (``ArmMotion`` for the Nextage); ``selection`` wires the grasp
+    selection between perception and the planner
+    (:func:`~tangle_drake.selection.methods.selection_wiring`: one method fixed, or the
+    benchmark's ``method`` input); graspability is :func:`default_graspability_params`;
+    ``meshcat`` is passed to a station built here.
     """
     station = station or build_station(scenario, meshcat)
     needed = [(motion.measured_port, True), ("gripper.state_measured", True),
@@ -214,7 +217,7 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
                                    "directives add them, like pick_demo.yaml)")
     camera = camera_model(scenario)
     roi = bin_roi(camera, inner_corners(scenario.bin))
-    params = params or default_graspability_params(scenario)
+    params = default_graspability_params(scenario)
 
     builder = DiagramBuilder()
     builder.AddSystem(station)
@@ -228,9 +231,6 @@ def build_pick_diagram(scenario: Scenario, choice: TangleChoice, motion: Motion,
     if planner_settings.record_crop is not None or planner_settings.record_view:
         builder.Connect(depth, planner.GetInputPort("depth_image"))
     builder.Connect(graspability.GetOutputPort("candidates"), planner.GetInputPort("candidates"))
-    if selection is None:  # the choice's method, fixed
-        selection = selection_wiring([choice_method(choice)], None, scenario,
-                                     MethodRun(choice.rule, seed))
     scored, selected = selection(builder, depth, graspability.GetOutputPort("candidates"))
     builder.Connect(scored, planner.GetInputPort("scored_candidates"))
     builder.Connect(selected, planner.GetInputPort("selected_grasp"))

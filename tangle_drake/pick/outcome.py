@@ -73,9 +73,48 @@ class PickView:
     score."""
 
 
+@dataclass(frozen=True)
+class TrueCount:
+    """Simulation only: what a pick truly brought up when the planner judged it (the episode
+    fills it in from :class:`~tangle_drake.pick.truth.PickTruth`; ``None`` on hardware)."""
+
+    lifted: int | None = None
+    """Parts brought up when the planner looked."""
+    held: int | None = None
+    """Parts held up by the gripper through contacts then
+    (:class:`~tangle_drake.pick.load_path.LoadPathMonitor`)."""
+    resting: int | None = None
+    """Of the ``held`` parts, how many still touched the pile or the bin then."""
+    held_decided: int | None = None
+    """Parts held up through contacts at the weighing that decided where the load went (the
+    last one: after a shake it can differ from ``held``)."""
+
+
+@dataclass(frozen=True)
+class PickTiming:
+    """How long a pick's stages took."""
+
+    perception_s: float = 0.0
+    """Wall time of rendering the depth image and the graspability index, s."""
+    cnn_s: float = 0.0
+    """Wall time of the tangle CNN and the selection rule, s."""
+    planning_s: float = 0.0
+    """Wall time of IK and trajectories, over every candidate tried, s."""
+    execution_s: float = 0.0
+    """Robot (simulated) time from the start of the approach to the return home, s."""
+    started_at: float | None = None
+    """Simulated (or controller) time at which the approach began, s."""
+
+    @property
+    def compute_s(self) -> float:
+        """Wall time of perception, selection and planning, s."""
+        return self.perception_s + self.cnn_s + self.planning_s
+
+
 @dataclass
 class PickRecord:
-    """One finished pick: which grasp, what happened, how long each stage took."""
+    """One finished pick: which grasp and why (the decision), what the robot saw come of it,
+    what truly came up (``truth``, simulation only) and how long each stage took (``timing``)."""
 
     index: int
     """1 for the first pick of the run."""
@@ -98,27 +137,9 @@ class PickRecord:
     truth_at: tuple[tuple[str, float], ...] = ()
     """When the planner judged the pick, by kind (:mod:`tangle_drake.pick.truth`): where the
     simulation's truth is taken, never by the planner itself."""
-    lifted: int | None = None
-    """Parts the simulation saw brought up when the planner looked (the episode fills it in
-    from :class:`~tangle_drake.pick.truth.PickTruth`; ``None`` on hardware)."""
-    held: int | None = None
-    """Parts held up by the gripper through contacts then
-    (:class:`~tangle_drake.pick.load_path.LoadPathMonitor`; ``None`` on hardware)."""
-    resting: int | None = None
-    """Of the ``held`` parts, how many still touched the pile or the bin then."""
-    held_decided: int | None = None
-    """Parts held up through contacts at the weighing that decided where the load went (the
-    last one: after a shake it can differ from ``held``); ``None`` on hardware."""
-    perception_s: float = 0.0
-    """Wall time of rendering the depth image and the graspability index, s."""
-    cnn_s: float = 0.0
-    """Wall time of the tangle CNN and the selection rule, s."""
-    planning_s: float = 0.0
-    """Wall time of IK and trajectories, over every candidate tried, s."""
-    execution_s: float = 0.0
-    """Robot (simulated) time from the start of the approach to the return home, s."""
-    started_at: float | None = None
-    """Simulated (or controller) time at which the approach began, s."""
+    truth: TrueCount = field(default_factory=TrueCount)
+    """Simulation only: what truly came up then (all ``None`` on hardware)."""
+    timing: PickTiming = field(default_factory=PickTiming)
     estimate: PayloadEstimate | None = None
     """Closed loop: the first weighing at the top of the lift."""
     verdict: Verdict | None = None
@@ -142,8 +163,8 @@ class PickRecord:
             what = f"failed: {self.reason}"
         else:
             what = self.outcome.value
-            if self.lifted is not None and self.outcome is Outcome.SEVERAL:
-                what += f" ({self.lifted})"
+            if self.truth.lifted is not None and self.outcome is Outcome.SEVERAL:
+                what += f" ({self.truth.lifted})"
         tried = ""
         if self.candidate is not None:
             p = "" if self.p_model is None else f", {self.p_model_name} {self.p_model:.2f}"
@@ -157,9 +178,10 @@ class PickRecord:
             tried += f" | {weighed}{steps}{self.disposition.value}"
         if Recovery.STIR in self.recoveries:
             tried += f" | then {Recovery.STIR.value}"
-        return (f"pick {self.index}: {what}{tried} | perception {self.perception_s * 1e3:.0f} ms, "
-                f"CNN {self.cnn_s * 1e3:.0f} ms, planning {self.planning_s * 1e3:.0f} ms, "
-                f"execution {self.execution_s:.1f} s")
+        t = self.timing
+        return (f"pick {self.index}: {what}{tried} | perception {t.perception_s * 1e3:.0f} ms, "
+                f"CNN {t.cnn_s * 1e3:.0f} ms, planning {t.planning_s * 1e3:.0f} ms, "
+                f"execution {t.execution_s:.1f} s")
 
 
 def classify_lift(width: float, lifted: int | None, empty_width: float) -> Outcome:

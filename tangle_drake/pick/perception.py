@@ -48,7 +48,7 @@ class Perception:
         record = PickRecord(index=len(s.picks) + 1)
         start = time.perf_counter()
         candidates = list(self._candidates.Eval(context))
-        record.perception_s = time.perf_counter() - start
+        record.timing = replace(record.timing, perception_s=time.perf_counter() - start)
         scored = [ScoredCandidate(c, None, float(c.score)) for c in candidates]
         ranked = scored
         start = time.perf_counter()  # HasValue evaluates a connected port: the CNN runs here
@@ -56,7 +56,7 @@ class Perception:
             selected = self._selected.Eval(context) if self._selected.HasValue(context) else None
             scored = list(self._scored.Eval(context))
             ranked = rank_scored(scored, selected)
-            record.cnn_s = time.perf_counter() - start
+            record.timing = replace(record.timing, cnn_s=time.perf_counter() - start)
         if self._settings.record_view and self._depth.HasValue(context):
             depth = np.array(self._depth.Eval(context).data)[:, :, 0]
             record.view = PickView(depth, scored[:VIEW_CANDIDATES])
@@ -76,7 +76,7 @@ class Perception:
             depth = np.asarray(self._depth.Eval(context).data)[:, :, 0]
             record.crop = candidate_crops(depth, self._intrinsics, [record.candidate],
                                           self._settings.record_crop)[0]
-        record.started_at = t
+        record.timing = replace(record.timing, started_at=t)
         s = replace(s, plan=plan, record=record, started=t, width=self._settings.open_width)
         return self._enter(Mode.APPROACH, s, t)
 

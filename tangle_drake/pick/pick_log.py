@@ -67,8 +67,8 @@ def pick_sample(record: PickRecord, pile_seed: int, task: int, part: str) -> dic
         "num_in_region": one(-1, np.int16), "num_lifted": one(-1, np.int16),
         "num_hanging": one(-1, np.int16), "target": one(-1, np.int16),
         "outcome": one(outcome, np.int8), "weighed_parts": one(weighed),
-        "sim_lifted": one(-1 if record.lifted is None else record.lifted, np.int16),
-        "sim_held": one(-1 if record.held is None else record.held, np.int16),
+        "sim_lifted": one(-1 if record.truth.lifted is None else record.truth.lifted, np.int16),
+        "sim_held": one(-1 if record.truth.held is None else record.truth.held, np.int16),
         "pose": np.asarray(c.pose, dtype=np.float64)[None],
         "part": np.array([part]),
     }

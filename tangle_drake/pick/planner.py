@@ -278,7 +278,8 @@ class PickPlanner(Perception, ClosedLoop, LeafSystem):
         if mode is Mode.OPEN or (mode is Mode.RELEASE and self._recovery is None):
             s = replace(s, width=self._settings.open_width)
         if mode is Mode.SETTLE:  # back home: the pick is over
-            record = replace(s.record, execution_s=t - s.started, started_at=s.started)
+            record = replace(s.record, timing=replace(s.record.timing, execution_s=t - s.started,
+                                                      started_at=s.started))
             s = self._finish(replace(s, plan=None, record=None), record, t)
         return s
 
@@ -295,8 +296,9 @@ class PickPlanner(Perception, ClosedLoop, LeafSystem):
             stirring = s.mode is Mode.STIR or s.loop.stir_due  # the grasp itself is over
             record = with_reason(s.record, "a safety stop came before the stir's end") \
                 if stirring else replace(
-                    s.record, outcome=Outcome.FAILED, execution_s=t - s.started,
-                    started_at=s.started, failure=FailureKind.SAFETY_STOP,
+                    s.record, outcome=Outcome.FAILED, failure=FailureKind.SAFETY_STOP,
+                    timing=replace(s.record.timing, execution_s=t - s.started,
+                                   started_at=s.started),
                     reason=f"safety stop during {s.mode.value}")
             return replace(stopped, picks=(*s.picks, record))
         if not fault and s.mode is Mode.STOPPED:

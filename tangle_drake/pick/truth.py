@@ -85,9 +85,9 @@ def with_truth(record: PickRecord, truth: TruthState, empty_width: float) -> Pic
 
     checked, decided = sample(CHECK), sample(DECIDED)
     if checked is not None:
-        record = replace(record, lifted=checked.lifted, held=checked.held,
-                         resting=checked.resting,
+        record = replace(record, truth=replace(record.truth, lifted=checked.lifted,
+                                               held=checked.held, resting=checked.resting),
                          outcome=classify_lift(record.width, checked.lifted, empty_width))
     if decided is not None:
-        record = replace(record, held_decided=decided.held)
+        record = replace(record, truth=replace(record.truth, held_decided=decided.held))
     return record

@@ -33,6 +33,7 @@ from tangle_drake.scenario.drivers import (
     camera_channel,
 )
 from tangle_drake.scenario.hardware import HardwareConfig, check_lcm_url, default_lcm_buses
+from tangle_drake.scenario.pick import PickConfig
 from tangle_drake.scenario.yaml_io import Tagged, find_bad_field, read_mapping
 
 
@@ -81,28 +82,6 @@ class PartCount:
     part: str = "u_hook"
     count: int = 15
     mesh_scale: float = 1.0
-
-
-@dataclass
-class PickConfig:
-    """How the pick diagram picks, as a run of this scenario does unless a command's flag says
-    otherwise (``--open-loop``, ``--rule``, ``--model``)."""
-
-    closed_loop: bool = True
-    """Weigh every lift, shake or put back what is not one part (needs the ``wrist`` sensor and
-    a tray); false: the paper's open loop, one look and one grasp per pick."""
-    hanging_parts: float = 2.0
-    """Closed loop: the longest chain the weighing must see whole, in lengths of the pile's
-    longest part: the held part and one hooked on it (a third is rare, and a shake drops most
-    seconds); the lift goes that high over the pile. 0: the approach's fixed lift."""
-    rule: str | None = None
-    """The demo's selection rule (``tangle-drake demo --help`` lists them); ``None``: the
-    paper's harmonic rule with a model, else graspability alone."""
-    model: str | None = None
-    """The demo's model checkpoint; ``None``: the part's shipped one."""
-
-    def validate(self, where: str) -> None:
-        _require(self.hanging_parts >= 0, f"{where}.hanging_parts", "must be >= 0")
 
 
 @dataclass

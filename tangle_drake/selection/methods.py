@@ -253,3 +253,9 @@ def selection_wiring(methods: Sequence[Method], part: str | None, scenario: Scen
             "selected_grasp")
 
     return wire
+
+
+def fixed_selection(choice: TangleChoice, scenario: Scenario, seed: int = 0):
+    """A ``build_pick_diagram`` selection that selects as ``choice`` says (its rule, with its
+    model if any); ``seed`` seeds the ``random`` rule."""
+    return selection_wiring([choice_method(choice)], None, scenario, MethodRun(choice.rule, seed))

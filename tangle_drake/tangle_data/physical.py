@@ -209,8 +209,8 @@ class PickRows:
                # What the auto-lift labeller counts; a physical pick does not.
                "num_in_region": -1, "num_lifted": -1, "num_hanging": -1, "target": -1,
                "outcome": code,
-               "sim_lifted": -1 if record.lifted is None else record.lifted,
-               "sim_held": -1 if record.held is None else record.held,
+               "sim_lifted": -1 if record.truth.lifted is None else record.truth.lifted,
+               "sim_held": -1 if record.truth.held is None else record.truth.held,
                "pose": np.asarray(c.pose, dtype=np.float64), "part": self.part}
         for name in self.FIELDS:
             self.rows[name].append(row[name])
