@@ -27,13 +27,13 @@ from pydrake.systems.sensors import CameraConfig
 from tangle_drake.episode.run import PickEpisode
 from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
 from tangle_drake.pick.outcome import PickRecord, summarize
-from tangle_drake.pile import settle_pile
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import BinConfig, PartCount, PileConfig, Scenario
 from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.selection.choice import resolve_tangle_choice
 from tangle_drake.selection.methods import fixed_selection
 from tangle_drake.station import build_station
+from tangle_drake.station.pile import settle_pile
 
 
 def example_scenario(parts: int) -> Scenario:

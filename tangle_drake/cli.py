@@ -11,7 +11,7 @@ from collections.abc import Sequence
 
 from tangle_drake import __version__
 from tangle_drake.commands import COMMAND_MODULES
-from tangle_drake.errors import SafetyStop, TangleDrakeError
+from tangle_drake.common.errors import SafetyStop, TangleDrakeError
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from tangle_drake.cli import main
-from tangle_drake.paths import diagrams_dir
+from tangle_drake.common.paths import diagrams_dir
 from tangle_drake.tangle_cnn.synthetic import write_synthetic_dataset
 
 

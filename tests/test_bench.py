@@ -25,19 +25,19 @@ from tangle_drake.bench.results import IDENTITY_FILE, RESULTS_FILE
 from tangle_drake.bench.runner import BenchOptions, plan, run_bench
 from tangle_drake.bench.trials import classify, method_seed, pile_seed
 from tangle_drake.cli import main
-from tangle_drake.crops import CropSpec
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.failures import FailureKind
-from tangle_drake.paths import diagrams_dir, shown_path
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.failures import FailureKind
+from tangle_drake.common.paths import diagrams_dir, shown_path
+from tangle_drake.perception.crops import CropSpec
 from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, TrueCount, classify_lift
-from tangle_drake.pile import PileSettler
 from tangle_drake.scenario import BinConfig, PartCount
 from tangle_drake.scenario.files import resolve_scenario, scenario_source
 from tangle_drake.selection.choice import trained_model_path
 from tangle_drake.selection.methods import GraspSelector, MethodRun, parse_method
 from tangle_drake.selection.registry import MODEL_PREFIX, REGISTRY
 from tangle_drake.station import build_station, part_bodies
+from tangle_drake.station.pile import PileSettler
 from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, save_atomic
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import DEFAULT_NORMALISATION

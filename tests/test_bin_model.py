@@ -15,10 +15,10 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource
 
-from tangle_drake.bin_model import bin_sdf, inside_bin
+from tangle_drake.common.paths import make_parser
 from tangle_drake.parts import load_part
-from tangle_drake.paths import make_parser
 from tangle_drake.scenario import BinConfig, Scenario
+from tangle_drake.station.bin_model import bin_sdf, inside_bin
 
 
 def _pried(down_n: float, out_n: float, tilt_deg: float, inset: float) -> np.ndarray:

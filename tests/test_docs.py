@@ -442,7 +442,7 @@ def tracked_text_files() -> list[Path]:
 
 
 def test_no_file_names_a_path_of_the_machine_that_made_it():
-    """Results record paths as ``tangle_drake.paths.shown_path`` writes them: relative, or
+    """Results record paths as ``tangle_drake.common.paths.shown_path`` writes them: relative, or
     under ``DATA/``."""
     found = [f"{path.relative_to(ROOT)}:{number}: {match.group(0)}"
              for path in tracked_text_files()

@@ -10,10 +10,10 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource
 from pydrake.systems.sensors import ImageDepth32F
 
-from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.entanglement.emap import EmapParams, entanglement_map
 from tangle_drake.entanglement.writhe import segment_writhe, writhe_matrix
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.perception.camera import CameraIntrinsics
 from tangle_drake.selection.emap_system import EntanglementMapSystem
 from tangle_drake.selection.rules import ScoredCandidate, rank_candidates
 

@@ -11,8 +11,8 @@ from pydrake.math import RigidTransform
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.drivers.force_torque import sample_draws
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.hardware.loop import run_with_hardware_sim
 from tangle_drake.pick.load_path import LoadPathMonitor, held_and_resting
 from tangle_drake.pick.payload import (

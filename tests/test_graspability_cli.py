@@ -9,10 +9,15 @@ import cv2
 import numpy as np
 import pytest
 
-from tangle_drake.camera import CameraIntrinsics, CameraModel, save_camera_json, top_view_pose
 from tangle_drake.cli import main
 from tangle_drake.graspability import GraspabilityParams, compute_candidates
 from tangle_drake.graspability.synthetic import pile_field
+from tangle_drake.perception.camera import (
+    CameraIntrinsics,
+    CameraModel,
+    save_camera_json,
+    top_view_pose,
+)
 
 FLOOR = 0.5
 K = CameraIntrinsics.from_fov_y(320, 240, 45.0)

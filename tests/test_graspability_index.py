@@ -8,7 +8,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from tangle_drake.camera import CameraIntrinsics, CameraModel, top_view_pose
 from tangle_drake.graspability import (
     GraspabilityParams,
     HandModel,
@@ -21,7 +20,8 @@ from tangle_drake.graspability.inputs import check_depth
 from tangle_drake.graspability.params import FINGER_GRIP_SPAN_M
 from tangle_drake.graspability.synthetic import HeightField, pile_field
 from tangle_drake.graspability.workmap import View, build_work_map
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.perception.camera import CameraIntrinsics, CameraModel, top_view_pose
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 
 FLOOR = 0.5
 K = CameraIntrinsics.from_fov_y(320, 240, 45.0)

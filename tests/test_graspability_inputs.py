@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tangle_drake.camera import CameraIntrinsics, CameraModel, top_view_pose
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.graspability import (
     GraspabilityParams,
     HandModel,
@@ -16,7 +15,8 @@ from tangle_drake.graspability import (
     roi_mask,
 )
 from tangle_drake.graspability.inputs import millimetre_depth_scale, sizes_disagree
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.perception.camera import CameraIntrinsics, CameraModel, top_view_pose
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
 
 K = CameraIntrinsics.from_fov_y(64, 48, 45.0)
 CAMERA = CameraModel(K, top_view_pose(np.zeros(3), 0.5))

@@ -27,7 +27,7 @@ from tangle_drake.graspability.reference import reference_grasp_maps
 from tangle_drake.graspability.roi import roi_mask
 from tangle_drake.graspability.synthetic import HeightField, wire_part
 from tangle_drake.graspability.workmap import View, build_work_map
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 
 PIXEL = 0.002
 LEVEL = 1e-4

@@ -3,14 +3,14 @@
 import numpy as np
 import pytest
 
-from tangle_drake.bin_model import inner_corners
+from tangle_drake.common.paths import diagrams_dir
 from tangle_drake.graspability import bin_roi, compute_candidates
-from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.parts import BUILTIN_PARTS
-from tangle_drake.paths import diagrams_dir
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
 from tangle_drake.scenario import PartCount, load_scenario
-from tangle_drake.scene import make_scene
 from tangle_drake.station import part_bodies
+from tangle_drake.station.bin_model import inner_corners
+from tangle_drake.station.scene import make_scene
 
 
 @pytest.mark.parametrize("part", BUILTIN_PARTS)

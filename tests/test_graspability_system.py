@@ -8,10 +8,10 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource
 from pydrake.systems.sensors import ImageDepth32F
 
-from tangle_drake.camera import CameraIntrinsics, CameraModel, top_view_pose
 from tangle_drake.graspability import GraspabilityParams, GraspCandidate, compute_candidates
 from tangle_drake.graspability.synthetic import pile_field
 from tangle_drake.graspability.system import GraspabilitySystem
+from tangle_drake.perception.camera import CameraIntrinsics, CameraModel, top_view_pose
 
 
 def test_system_outputs_the_functions_candidates():

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from cli_run import run_command
 
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import diagrams_dir
 from tangle_drake.drivers.limits import station_limits
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.hardware.loop import HardwareInTheLoop, run_with_hardware_sim
 from tangle_drake.hardware.scripted import default_target, scripted_controller
-from tangle_drake.paths import diagrams_dir
 from tangle_drake.scenario import load_scenario
 from tangle_drake.station.safety import Mode
 

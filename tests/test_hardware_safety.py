@@ -9,7 +9,7 @@ from pydrake.systems.analysis import Simulator
 
 from tangle_drake.drivers.limits import RobotLimits
 from tangle_drake.lcm_io.messages import Received
-from tangle_drake.robot import NEXTAGE_JOINTS
+from tangle_drake.robot_model.nextage import NEXTAGE_JOINTS
 from tangle_drake.scenario.hardware import HardwareConfig
 from tangle_drake.station.safety import Mode, SafetySupervisor
 

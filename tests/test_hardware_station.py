@@ -17,9 +17,9 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import PortDataType
 from pydrake.systems.lcm import LcmBuses
 
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.paths import diagrams_dir
-from tangle_drake.robot import HOME
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import diagrams_dir
+from tangle_drake.robot_model.nextage import HOME
 from tangle_drake.scenario import load_scenario, parse_scenario
 from tangle_drake.station import SIM_ONLY_PREFIX, build_station
 from tangle_drake.station.safety import Mode

@@ -24,10 +24,10 @@ from tangle_drake.pick.meshcat_view import (
     work_view,
 )
 from tangle_drake.pick.outcome import PickRecord, PickView
-from tangle_drake.pile import settle_pile
 from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.selection.rules import ScoredCandidate
 from tangle_drake.station import build_station
+from tangle_drake.station.pile import settle_pile
 
 MIN_SHARE = 0.04
 """The bin's corners must span at least this share of a 3:2 frame (a far side view from

@@ -15,7 +15,7 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.multibody.tree import RotationalInertia, SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.parts import (
     BUILTIN_PARTS,
     PartModel,

@@ -1,10 +1,11 @@
-"""The path helpers of ``tangle_drake.paths``: how results record the paths they were given."""
+"""The path helpers of ``tangle_drake.common.paths``: how results record the paths they were
+given."""
 
 import argparse
 from pathlib import Path
 
 from tangle_drake.commands.bench import command_line
-from tangle_drake.paths import PLACEHOLDER, shown_path
+from tangle_drake.common.paths import PLACEHOLDER, shown_path
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -12,7 +12,7 @@ from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 from test_pick_planner import FakeMotion, candidate
 
-from tangle_drake.failures import FailureKind
+from tangle_drake.common.failures import FailureKind
 from tangle_drake.pick.bin_contents import BinContents
 from tangle_drake.pick.payload import PayloadEstimate, PayloadPhase, PayloadRequest
 from tangle_drake.pick.planner import Mode, PickPlanner, PickSettings
@@ -297,13 +297,13 @@ def test_a_simulated_closed_loop_pick_is_weighed_and_delivered_to_the_tray():
 
     from tangle_drake.episode.run import PickEpisode
     from tangle_drake.pick.diagram import build_pick_diagram, closed_loop_settings
-    from tangle_drake.pile import settle_pile
     from tangle_drake.planning.motions import motion_for
     from tangle_drake.scenario import PartCount
     from tangle_drake.scenario.files import resolve_scenario
     from tangle_drake.selection.choice import TangleChoice
     from tangle_drake.selection.methods import fixed_selection
     from tangle_drake.station import build_station
+    from tangle_drake.station.pile import settle_pile
 
     scenario = resolve_scenario("floating_gripper.yaml")
     scenario = replace(scenario, view_cameras=[],

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from cli_run import run_command
 
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.dataset import finished_tasks, load_samples, read_manifest
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import GraspCandidate
 from tangle_drake.selection.methods import GraspSelector, MethodRun
 from tangle_drake.station.perturb import ContactScaler, PhysicsSpread, PickPhysics, offset_pose
@@ -85,8 +85,8 @@ def test_an_interrupted_collection_resumes_to_the_same_picks(uninterrupted, tmp_
 
 
 def test_the_fast_pick_ends_an_empty_close_there_with_the_full_picks_outcome():
+    from tangle_drake.common.paths import diagrams_dir
     from tangle_drake.episode.episode import Episode
-    from tangle_drake.paths import diagrams_dir
     from tangle_drake.pick.outcome import Outcome
     from tangle_drake.selection.methods import Method
     from tangle_drake.tangle_data.physical import PICK_SCENARIO, pick_data_scenario
@@ -148,7 +148,7 @@ def test_bad_options_are_clear_errors(argv, message, tmp_path):
 
 
 def test_a_scenario_without_a_gripper_to_pick_with_is_refused(tmp_path):
-    from tangle_drake.paths import diagrams_dir
+    from tangle_drake.common.paths import diagrams_dir
 
     text = (diagrams_dir() / "pile_only.yaml").read_text()
     with pytest.raises(TangleDrakeError, match="the pick-data scenario: picking needs a robot"):

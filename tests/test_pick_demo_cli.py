@@ -5,9 +5,9 @@ from functools import partial
 import pytest
 from cli_run import run_command
 
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import diagrams_dir
 from tangle_drake.episode.demo import DemoOptions, run_demo
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.paths import diagrams_dir
 from tangle_drake.selection import choice as selection
 from tangle_drake.selection.choice import resolve_tangle_choice
 

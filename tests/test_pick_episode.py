@@ -7,13 +7,13 @@ import pytest
 
 from tangle_drake.episode.run import PickEpisode, RunEnd
 from tangle_drake.pick.diagram import build_pick_diagram, pick_settings
-from tangle_drake.pile import PileSettler, settle_pile
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import PartCount
 from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.selection.choice import TangleChoice
 from tangle_drake.selection.methods import fixed_selection
 from tangle_drake.station import build_station
+from tangle_drake.station.pile import PileSettler, settle_pile
 
 
 @pytest.fixture(scope="module")

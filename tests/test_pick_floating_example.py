@@ -6,7 +6,7 @@ from pathlib import Path
 
 import torch
 
-from tangle_drake.crops import CropSpec
+from tangle_drake.perception.crops import CropSpec
 from tangle_drake.pick.outcome import Outcome
 from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, save_atomic
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet

@@ -4,10 +4,10 @@ format of `collect`, runs append to it, and `train`'s loader reads it."""
 import numpy as np
 import pytest
 
-from tangle_drake.crops import CropSpec
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.dataset import load_samples, read_manifest
 from tangle_drake.episode.demo import DemoOptions, run_demo
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.perception.crops import CropSpec
 from tangle_drake.pick.outcome import Outcome
 from tangle_drake.pick.pick_log import OUTCOME_CODES
 from tangle_drake.scenario.files import resolve_scenario

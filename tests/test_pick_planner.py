@@ -9,7 +9,7 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 
-from tangle_drake.failures import FailureKind
+from tangle_drake.common.failures import FailureKind
 from tangle_drake.pick.outcome import Outcome, summarize
 from tangle_drake.pick.planner import Mode, PickPlanner, PickSettings, rank_scored
 from tangle_drake.pick.truth import PickTruth, with_truth

@@ -3,12 +3,12 @@
 import numpy as np
 import pytest
 
-from tangle_drake.bin_model import inside_bin
+from tangle_drake.common.paths import diagrams_dir
 from tangle_drake.parts import BUILTIN_PARTS
-from tangle_drake.paths import diagrams_dir
 from tangle_drake.scenario import PartCount, load_scenario
-from tangle_drake.scene import make_scene
 from tangle_drake.station import part_bodies
+from tangle_drake.station.bin_model import inside_bin
+from tangle_drake.station.scene import make_scene
 
 
 def _scenario(part: str, count: int = 15, seed: int = 0):
@@ -61,11 +61,11 @@ def test_same_seed_gives_the_same_pile_and_another_seed_does_not():
 def test_a_pile_that_cannot_be_made_or_picked_is_refused_before_any_simulation():
     from dataclasses import replace
 
-    from tangle_drake.errors import TangleDrakeError
-    from tangle_drake.gripper import GripperSpec
-    from tangle_drake.pile import check_pile
+    from tangle_drake.common.errors import TangleDrakeError
+    from tangle_drake.robot_model.gripper import GripperSpec
     from tangle_drake.scenario import PartCount
     from tangle_drake.scenario.files import resolve_scenario
+    from tangle_drake.station.pile import check_pile
 
     scenario = resolve_scenario("pick_demo.yaml")
 
@@ -86,8 +86,8 @@ def test_a_pile_that_cannot_be_made_or_picked_is_refused_before_any_simulation()
 
 def test_bench_refuses_a_part_too_large_for_the_bin_up_front(tmp_path):
     from tangle_drake.bench.runner import BenchOptions, plan
-    from tangle_drake.errors import TangleDrakeError
-    from tangle_drake.paths import diagrams_dir
+    from tangle_drake.common.errors import TangleDrakeError
+    from tangle_drake.common.paths import diagrams_dir
 
     text = (diagrams_dir() / "floating_gripper.yaml").read_text().replace(
         "  - part: u_hook\n    count: 15", "  - part: u_hook\n    count: 15\n    mesh_scale: 6")

@@ -6,7 +6,7 @@ import pytest
 from pydrake.math import RigidTransform
 
 from tangle_drake.parts.catalog import builtin_spec
-from tangle_drake.pile_freeze import PileFreeze, parts_beyond
+from tangle_drake.station.pile_freeze import PileFreeze, parts_beyond
 from tangle_drake.tangle_data.collect import default_scenario_text
 from tangle_drake.tangle_data.settings import CollectSettings
 from tangle_drake.tangle_data.simulator import TangleDataSimulator

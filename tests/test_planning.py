@@ -7,9 +7,8 @@ import numpy as np
 import pytest
 from pydrake.math import RigidTransform, RotationMatrix
 
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.failures import FailureKind
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.failures import FailureKind
 from tangle_drake.planning.arm_motion import ArmMotion
 from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses, symmetric_grasps
 from tangle_drake.planning.motion import PlanningError
@@ -21,7 +20,8 @@ from tangle_drake.planning.trajectory import (
     rest_to_rest,
     through_waypoints,
 )
-from tangle_drake.robot import HOME, LEFT_ARM
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
+from tangle_drake.robot_model.nextage import HOME, LEFT_ARM
 from tangle_drake.scenario.files import resolve_scenario
 
 BIN = resolve_scenario(None).bin  # the demo's

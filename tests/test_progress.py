@@ -1,8 +1,8 @@
 """Long jobs say where they stand in a log too (off a terminal tqdm draws nothing)."""
 
 
-from tangle_drake.progress import Progress
-from tangle_drake.tangle_data.progress import CollectProgress
+from tangle_drake.common.progress import Progress
+from tangle_drake.tangle_data.collect_progress import CollectProgress
 
 
 def test_off_a_terminal_a_job_prints_lines_with_its_figures_and_the_time_left(capsys):

@@ -11,13 +11,13 @@ import pytest
 from cli_run import run_command
 
 from tangle_drake.bench.results import RESULTS_FILE
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.workers import RAY_RETRIES
 from tangle_drake.dataset import finished_tasks
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_data import collect as collect_module
 from tangle_drake.tangle_data.collect import collect
 from tangle_drake.tangle_data.settings import CollectSettings
 from tangle_drake.tangle_data.simulator import TangleDataSimulator
-from tangle_drake.workers import RAY_RETRIES
 
 ray = pytest.importorskip("ray", reason="pip install 'ray>=2.9' (the dev extra has it)")
 

@@ -26,8 +26,8 @@ from pydrake.systems.primitives import ConstantVectorSource
 
 from tangle_drake import robot_model
 from tangle_drake.drivers.parallel_jaw import finger_positions, opening
-from tangle_drake.gripper import DEFAULT_GRIPPER
-from tangle_drake.robot import (
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
+from tangle_drake.robot_model.nextage import (
     GRIPPER_JOINTS,
     INIT_RTM,
     LEFT_ARM,

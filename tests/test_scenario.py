@@ -5,8 +5,8 @@ import re
 
 import pytest
 
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.paths import diagrams_dir
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import diagrams_dir
 from tangle_drake.scenario import Scenario, load_scenario, parse_scenario
 
 

@@ -14,8 +14,8 @@ import pytest
 import yaml
 from pydrake.common.yaml import yaml_dump_typed
 
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.paths import diagrams_dir
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import diagrams_dir
 from tangle_drake.pick.diagram import (
     closed_loop_settings,
     default_graspability_params,

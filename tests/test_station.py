@@ -9,10 +9,10 @@ import pytest
 from pydrake.systems.analysis import Simulator
 
 from tangle_drake.cli import main
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.gripper import DEFAULT_GRIPPER
-from tangle_drake.paths import diagrams_dir
-from tangle_drake.robot import HOME, LEFT_ARM
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import diagrams_dir
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
+from tangle_drake.robot_model.nextage import HOME, LEFT_ARM
 from tangle_drake.scenario import PartCount, load_scenario, parse_scenario
 from tangle_drake.station import build_station, camera_model
 
@@ -168,9 +168,9 @@ def test_non_editable_install_finds_models_and_scenarios(tmp_path):
                     "--no-build-isolation", "--target", str(target), source],
                    check=True, capture_output=True)
     probe = (
-        "import tangle_drake, tangle_drake.paths as p;"
+        "import tangle_drake, tangle_drake.common.paths as p;"
         "from pydrake.multibody.plant import MultibodyPlant;"
-        "from tangle_drake.robot import add_nextage_with_gripper;"
+        "from tangle_drake.robot_model.nextage import add_nextage_with_gripper;"
         "plant = MultibodyPlant(0.002); add_nextage_with_gripper(plant); plant.Finalize();"
         "print(tangle_drake.__file__, p.models_dir(), p.diagrams_dir(), plant.num_positions())"
     )

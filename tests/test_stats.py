@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from tangle_drake.stats import detectable_difference, paired_difference, wilson
+from tangle_drake.common.stats import detectable_difference, paired_difference, wilson
 
 
 @pytest.mark.parametrize(("successes", "n", "lower", "upper"), [

@@ -4,12 +4,12 @@ carry the sweep out (the gantry's, the Nextage's)."""
 import numpy as np
 import pytest
 
-from tangle_drake.camera import CameraIntrinsics, CameraModel, top_view_pose
 from tangle_drake.graspability.synthetic import HeightField
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.perception.camera import CameraIntrinsics, CameraModel, top_view_pose
 from tangle_drake.pick.bin_contents import BinContents, bin_contents
 from tangle_drake.pick.stir import StirSettings, looks_empty, stir_line, stir_poses
 from tangle_drake.planning.trajectory import chain
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
 from tangle_drake.scenario import BinConfig
 
 BIN = BinConfig(center=[0.34, 0.22], floor_height=0.93, inner_size=[0.20, 0.28],
@@ -173,7 +173,7 @@ def test_the_gantry_sweeps_along_the_floor_and_comes_home():
 
 def test_the_arm_sweeps_clear_of_the_bin_within_its_limits():
     from tangle_drake.planning.arm_motion import ArmMotion
-    from tangle_drake.robot import HOME
+    from tangle_drake.robot_model.nextage import HOME
     from tangle_drake.scenario.files import resolve_scenario
 
     bin_config = resolve_scenario(None).bin
@@ -199,13 +199,13 @@ def test_a_stir_in_the_simulation_moves_parts_and_keeps_them_in_the_bin():
 
     from pydrake.systems.analysis import Simulator
 
-    from tangle_drake.bin_model import inside_bin
     from tangle_drake.drivers.limits import station_limits
-    from tangle_drake.pile import settle_pile
     from tangle_drake.planning.gantry_motion import GantryMotion
     from tangle_drake.scenario import PartCount
     from tangle_drake.scenario.files import resolve_scenario
     from tangle_drake.station import build_station, camera_model
+    from tangle_drake.station.bin_model import inside_bin
+    from tangle_drake.station.pile import settle_pile
 
     scenario = resolve_scenario("floating_gripper.yaml")
     scenario = replace(scenario, view_cameras=[],

@@ -14,10 +14,10 @@ import pytest
 import torch
 from cli_run import run_command
 
-from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import shown_path
 from tangle_drake.dataset import load_samples
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.paths import shown_path
+from tangle_drake.perception.camera import CameraIntrinsics
 from tangle_drake.selection.choice import resolve_tangle_choice
 from tangle_drake.selection.cnn_system import TangleCnnSystem
 from tangle_drake.selection.methods import parse_method

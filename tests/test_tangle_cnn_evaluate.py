@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from cli_run import run_command
 
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.dataset import load_samples, write_shard
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.evaluate import evaluate_model
 from tangle_drake.tangle_cnn.metrics import FEW_PER_CLASS, balanced_accuracy, few_samples_warning
 from tangle_drake.tangle_cnn.model import load_tangle_model

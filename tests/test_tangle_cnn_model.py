@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 import torch
 
-from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.crops import CropSpec, extract_crop
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.perception.camera import CameraIntrinsics
+from tangle_drake.perception.crops import CropSpec, extract_crop
 from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, read_checkpoint, save_atomic
 from tangle_drake.tangle_cnn.model import TangleModel, load_tangle_model
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet

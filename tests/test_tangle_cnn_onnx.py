@@ -9,8 +9,8 @@ import pytest
 import torch
 from cli_run import run_command
 
-from tangle_drake.crops import CropSpec
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.perception.crops import CropSpec
 from tangle_drake.tangle_cnn.checkpoint import model_checkpoint, save_atomic
 from tangle_drake.tangle_cnn.model import load_tangle_model
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import torch
 
-from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.crops import DEFAULT_CROP, CropSpec, candidate_crops, extract_crop
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.perception.camera import CameraIntrinsics
+from tangle_drake.perception.crops import DEFAULT_CROP, CropSpec, candidate_crops, extract_crop
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
 from tangle_drake.tangle_cnn.augment import augment_batch, dihedral
 from tangle_drake.tangle_cnn.metrics import binary_metrics, roc_auc
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet, parameter_count

@@ -6,7 +6,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.selection.rules import (
     MODEL_RULES,
     RANDOM_TOP_K,

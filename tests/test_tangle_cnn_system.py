@@ -10,9 +10,9 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource
 from pydrake.systems.sensors import ImageDepth32F
 
-from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.crops import CropSpec
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.perception.camera import CameraIntrinsics
+from tangle_drake.perception.crops import CropSpec
 from tangle_drake.selection.cnn_system import TangleCnnSystem
 from tangle_drake.selection.methods import GraspSelector, MethodRun
 from tangle_drake.selection.rules import ScoredCandidate, rank

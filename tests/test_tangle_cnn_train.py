@@ -11,10 +11,10 @@ import pytest
 import torch
 from cli_run import run_command
 
-from tangle_drake.crops import CropSpec
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.dataset import write_manifest, write_shard
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.perception.crops import CropSpec
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
 from tangle_drake.tangle_cnn import train as train_module
 from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
 from tangle_drake.tangle_cnn.model import load_tangle_model

@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 from cli_run import run_command
 
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.dataset import SAMPLE_FIELDS, finished_tasks, load_samples, read_manifest
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.tangle_data import collect as collect_module
 from tangle_drake.tangle_data.collect import collect, default_scenario_text
 from tangle_drake.tangle_data.settings import CollectSettings

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 from pydrake.math import RigidTransform, RotationMatrix
 
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.parts import wire
 from tangle_drake.parts.catalog import builtin_spec
-from tangle_drake.scene import render_depth
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
+from tangle_drake.station.scene import render_depth
 from tangle_drake.tangle_data.closing_region import parts_in_region
 from tangle_drake.tangle_data.collect import default_scenario_text
 from tangle_drake.tangle_data.labels import label_pick

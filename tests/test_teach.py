@@ -13,11 +13,11 @@ import trimesh
 from cli_run import run_command
 
 from tangle_drake.cli import main
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.parts import catalog, wire
-from tangle_drake.pile import PileReport
 from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.selection.choice import model_part_notice, trained_model_path
+from tangle_drake.station.pile import PileReport
 from tangle_drake.teach import pipeline
 from tangle_drake.teach.check import check_part, settle_verdict
 from tangle_drake.teach.pipeline import STAGES, Teacher, TeachSettings

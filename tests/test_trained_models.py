@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tangle_drake.crops import DEFAULT_CROP
-from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.parts.catalog import BUILTIN_PARTS
+from tangle_drake.perception.crops import DEFAULT_CROP
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
 from tangle_drake.selection.choice import TRAINED_DIR, resolve_tangle_choice, trained_model_path
 from tangle_drake.selection.methods import parse_method
 from tangle_drake.tangle_cnn.card import validation_row

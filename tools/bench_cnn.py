@@ -30,9 +30,9 @@ import cv2
 import numpy as np
 import torch
 
-from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.crops import DEFAULT_CROP, candidate_crops
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.perception.camera import CameraIntrinsics
+from tangle_drake.perception.crops import DEFAULT_CROP, candidate_crops
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
 from tangle_drake.tangle_cnn.checkpoint import read_checkpoint
 from tangle_drake.tangle_cnn.model import TangleModel, load_tangle_model
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet, parameter_count

@@ -30,13 +30,13 @@ from dataclasses import replace
 
 import numpy as np
 
+from tangle_drake.common.workers import start_workers
 from tangle_drake.dataset.store import TaskResult
 from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.tangle_data.collect import default_scenario_text
 from tangle_drake.tangle_data.defaults import default_parts_per_pile
 from tangle_drake.tangle_data.settings import CollectSettings, LiftSettings
 from tangle_drake.tangle_data.simulator import TangleDataSimulator, data_scenario
-from tangle_drake.workers import start_workers
 
 REFERENCE_LIFTS = {
     "slow": LiftSettings(speed_m_s=0.1, accel_m_s2=1.0, hold_s=0.5, freeze_beyond_radii=0.0,

@@ -14,15 +14,15 @@ import time
 
 import numpy as np
 
-from tangle_drake.bin_model import inner_corners
 from tangle_drake.entanglement.emap import entanglement_map
 from tangle_drake.graspability.roi import bin_roi
 from tangle_drake.scenario.files import resolve_scenario
 from tangle_drake.station import camera_model
+from tangle_drake.station.bin_model import inner_corners
 
 
 def _pile_depth(scenario) -> np.ndarray:
-    from tangle_drake.scene import make_scene  # simulates the pile: only without --depth
+    from tangle_drake.station.scene import make_scene  # simulates the pile: only without --depth
 
     scenario.view_cameras = []
     return make_scene(scenario, seed=0).depth

@@ -22,7 +22,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 
 from tangle_drake.planning.arm_motion import ArmMotion
 from tangle_drake.planning.motion import PlanningError
-from tangle_drake.robot import HOME
+from tangle_drake.robot_model.nextage import HOME
 from tangle_drake.scenario import BinConfig
 from tangle_drake.scenario.files import resolve_scenario
 

@@ -24,7 +24,7 @@ from pathlib import Path
 from tangle_drake.bench.clear_report import figures
 from tangle_drake.bench.clearing import ClearWorker
 from tangle_drake.bench.runner import BenchOptions, plan
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.scenario.files import scenario_source
 
 SCENARIO = "diagrams/dense_bin.yaml"

@@ -21,13 +21,13 @@ import time
 from collections import Counter
 from pathlib import Path
 
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.failures import FailureKind
+from tangle_drake.common.paths import diagrams_dir
+from tangle_drake.common.stats import wilson
 from tangle_drake.episode.episode import Episode
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.failures import FailureKind
-from tangle_drake.paths import diagrams_dir
 from tangle_drake.planning.motions import scenario_mode
 from tangle_drake.selection.methods import Method, MethodRun
-from tangle_drake.stats import wilson
 from tangle_drake.tangle_data.physical import PICK_SCENARIO, PickDataSettings, pick_data_scenario
 from tangle_drake.tangle_data.seeds import pile_seed
 

@@ -32,9 +32,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import shown_path
 from tangle_drake.dataset import MANIFEST, finished_tasks, load_samples, read_shard, shard_name
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.paths import shown_path
 from tangle_drake.tangle_cnn.evaluate import class_probabilities
 from tangle_drake.tangle_cnn.metrics import binary_metrics, roc_auc
 from tangle_drake.tangle_cnn.model import load_tangle_model

@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 
 from tangle_drake.scenario.files import resolve_scenario
-from tangle_drake.scene import make_scene
+from tangle_drake.station.scene import make_scene
 
 
 def depth_to_colour(depth: np.ndarray, floor: float) -> np.ndarray:

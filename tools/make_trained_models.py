@@ -51,9 +51,9 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import shown_path
 from tangle_drake.parts.catalog import BUILTIN_PARTS
-from tangle_drake.paths import shown_path
 from tangle_drake.selection.choice import TRAINED_DIR, trained_model_path
 from tangle_drake.tangle_cnn.card import (
     TEST_HEADER,

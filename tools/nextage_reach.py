@@ -30,7 +30,7 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.solvers import Solve
 from pydrake.systems.framework import DiagramBuilder
 
-from tangle_drake.robot import INIT_RTM, add_nextage_with_gripper
+from tangle_drake.robot_model.nextage import INIT_RTM, add_nextage_with_gripper
 
 BIN_INNER = (0.20, 0.28)
 """Inner size of the bin along world (x, y), m."""

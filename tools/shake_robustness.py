@@ -37,18 +37,18 @@ from pydrake.systems.analysis import InitializeParams
 from pydrake.systems.framework import Context
 
 from tangle_drake.bench.clearing import tray_count
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import diagrams_dir
+from tangle_drake.common.stats import wilson
 from tangle_drake.episode.episode import Episode
 from tangle_drake.episode.run import PickEpisode, RunEnd
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.paths import diagrams_dir
 from tangle_drake.pick.load_path import GRIPPER_BODY, LoadPathMonitor
 from tangle_drake.pick.planner import Mode
-from tangle_drake.pile import PileSettler
 from tangle_drake.scenario import PartCount, Scenario, load_scenario
 from tangle_drake.selection.methods import Method, MethodRun
 from tangle_drake.station import build_station
 from tangle_drake.station.perturb import ContactScaler
-from tangle_drake.stats import wilson
+from tangle_drake.station.pile import PileSettler
 from tangle_drake.tangle_data.seeds import pile_seed
 
 VARIANTS = {"model": (1.0, False), "friction_0.7": (0.7, False),

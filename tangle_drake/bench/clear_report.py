@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tangle_drake.provenance import describe
+from tangle_drake.common.provenance import describe
 
 BOOTSTRAP_SAMPLES = 2000
 BOOTSTRAP_SEED = 0

@@ -18,7 +18,6 @@ import numpy as np
 from pydrake.systems.framework import Context
 
 from tangle_drake.bench.trials import BenchConfig, PartSpec, method_seed, part_scenario, pile_seed
-from tangle_drake.bin_model import inside_bin
 from tangle_drake.episode.episode import Episode
 from tangle_drake.episode.run import POLL
 from tangle_drake.pick.diagram import (
@@ -28,6 +27,7 @@ from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.scenario import BinConfig
 from tangle_drake.selection.methods import MethodRun
+from tangle_drake.station.bin_model import inside_bin
 
 SIM_TIME_PER_PART = 40.0
 """Simulated seconds allowed per part in the pile before a clearing is stopped, s."""

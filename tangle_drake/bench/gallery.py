@@ -19,8 +19,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.graspability.overlay import top_view
+from tangle_drake.perception.camera import CameraIntrinsics
 from tangle_drake.pick.outcome import PickRecord
 
 GALLERY = "gallery"

@@ -20,8 +20,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from tangle_drake.bench.trials import FAILURES, RESULTS
-from tangle_drake.provenance import describe
-from tangle_drake.stats import paired_difference, wilson
+from tangle_drake.common.provenance import describe
+from tangle_drake.common.stats import paired_difference, wilson
 
 ALL = "all"
 """The part name of the rows over every part."""

@@ -15,7 +15,7 @@ import json
 import os
 from pathlib import Path
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 
 IDENTITY_FILE = "bench.json"
 SCENARIO_FILE = "scenario.yaml"

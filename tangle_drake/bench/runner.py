@@ -1,7 +1,7 @@
 """Drive a benchmark: check the arguments, resume the results, farm trials out, report.
 
 Trials are handed out part by part, lowest unfinished index first, to local processes or Ray
-actors (:mod:`tangle_drake.workers`); each finished trial is appended to ``results.jsonl`` at
+actors (:mod:`tangle_drake.common.workers`); each finished trial is appended to ``results.jsonl`` at
 once, so Ctrl-C or a kill loses only the trials in flight, and running the same command again
 redoes just those. The report is written from whatever is on disk, interrupted or not.
 """
@@ -31,25 +31,25 @@ from tangle_drake.bench.trials import (
     part_scenario,
     pile_seed,
 )
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import shown_path
+from tangle_drake.common.progress import Progress
+from tangle_drake.common.provenance import made_by
+from tangle_drake.common.workers import start_workers
 from tangle_drake.parts import BUILTIN_PARTS, load_part
 from tangle_drake.parts.library import part_digest
-from tangle_drake.paths import shown_path
 from tangle_drake.pick.diagram import (
     closed_loop_settings,
     default_graspability_params,
     weighing_warning,
 )
-from tangle_drake.pile import check_pile
 from tangle_drake.planning.motions import scenario_mode
-from tangle_drake.progress import Progress
-from tangle_drake.provenance import made_by
 from tangle_drake.scenario.files import ScenarioSource, scenario_source
 from tangle_drake.selection.choice import model_part_notice
 from tangle_drake.selection.methods import Method, file_digest, parse_method
 from tangle_drake.selection.registry import DEFAULT_METHODS
 from tangle_drake.station.perturb import PhysicsSpread
-from tangle_drake.workers import start_workers
+from tangle_drake.station.pile import check_pile
 
 DEFAULT_TRIALS = 50
 DEFAULT_OUT = Path("results/bench")

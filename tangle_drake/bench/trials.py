@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 
 from tangle_drake.bench.gallery import TILE_KEY, caption, failure_kind, timed_tile
+from tangle_drake.common.failures import FailureKind
 from tangle_drake.episode.episode import Episode
-from tangle_drake.failures import FailureKind
 from tangle_drake.pick.outcome import Outcome, PickRecord
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
 from tangle_drake.selection.methods import Method, MethodRun
@@ -32,7 +32,7 @@ MODES = tuple(MODE_SCENARIOS)
 RESULTS = ("success", "tangled", "empty", "failure")
 """A pick's result: exactly one part came up, several, none, or nothing was attempted."""
 FAILURES = tuple(kind.value for kind in FailureKind)
-"""Why a pick failed (:class:`~tangle_drake.failures.FailureKind`): no grasp candidate, none
+"""Why a pick failed (:class:`~tangle_drake.common.failures.FailureKind`): no grasp candidate, none
 the robot could reach or reach without a collision, ..., or the pick did not finish within the
 simulated time allowed."""
 

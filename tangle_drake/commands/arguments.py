@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from tangle_drake.errors import TangleDrakeError, check_seed
+from tangle_drake.common.errors import TangleDrakeError, check_seed
 
 if TYPE_CHECKING:
     from tangle_drake.scenario.files import ScenarioSource

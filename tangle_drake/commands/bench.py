@@ -7,9 +7,9 @@ import shlex
 from pathlib import Path
 
 from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument, scenario_from
-from tangle_drake.failures import FailureKind
+from tangle_drake.common.failures import FailureKind
+from tangle_drake.common.workers import add_worker_arguments
 from tangle_drake.selection.registry import DEFAULT_METHODS, help_list
-from tangle_drake.workers import add_worker_arguments
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -71,7 +71,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def command_line(args: argparse.Namespace) -> str:
     """The command as given (the options that make the results; not --workers or --ray,
     which change only how fast), for the report, its paths as ``shown_path`` writes them."""
-    from tangle_drake.paths import shown_path
+    from tangle_drake.common.paths import shown_path
 
     def method(text: str) -> str:  # model:PATH and RULE:PATH name a file
         prefix, colon, rest = text.partition(":")

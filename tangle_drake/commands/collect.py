@@ -16,7 +16,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument, scenario_from
-from tangle_drake.workers import add_worker_arguments
+from tangle_drake.common.workers import add_worker_arguments
 
 DEFAULT_SAMPLES = 5100
 LABELS = ("lift", "pick")
@@ -126,7 +126,7 @@ def _scenario_text(args: argparse.Namespace, default: str | None = None) -> str:
 
 def pick_settings_from_args(args: argparse.Namespace):
     """The physical-pick settings the arguments ask for (``--label pick``)."""
-    from tangle_drake.errors import TangleDrakeError
+    from tangle_drake.common.errors import TangleDrakeError
     from tangle_drake.tangle_data.physical import PICK_SCENARIO, PickDataSettings
 
     given = [name for name in LIFT_ONLY if getattr(args, name) not in (None, False, 1)]
@@ -158,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
                                           ("--depth-noise", args.depth_noise is not None))
                  if given]
     if pick_only:
-        from tangle_drake.errors import TangleDrakeError
+        from tangle_drake.common.errors import TangleDrakeError
 
         flag = pick_only[0]
         raise TangleDrakeError(f"{flag} is an option of --label pick; the force lift "

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from tangle_drake.commands.arguments import add_scenario_argument, scenario_from
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -24,7 +24,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from tangle_drake.graphviz import graphviz_installed, write_graphviz
+    from tangle_drake.common.graphviz import graphviz_installed, write_graphviz
     from tangle_drake.station import build_station
 
     if args.depth < 0:

@@ -31,8 +31,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
+    from tangle_drake.common.errors import TangleDrakeError
     from tangle_drake.dataset import read_manifest
-    from tangle_drake.errors import TangleDrakeError
     from tangle_drake.selection.choice import resolve_tangle_choice, trained_model_path
     from tangle_drake.tangle_cnn.evaluate import evaluate_model
     from tangle_drake.tangle_cnn.metrics import few_samples_warning

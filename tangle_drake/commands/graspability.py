@@ -18,9 +18,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from tangle_drake.camera import CameraModel, load_camera_json
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.entanglement.emap import entanglement_map
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import (
     FINGER_GRIP_SPAN_M,
     GraspabilityParams,
@@ -45,7 +44,8 @@ from tangle_drake.graspability.inputs import (
 )
 from tangle_drake.graspability.overlay import depth_preview, draw_candidates, emap_underlay
 from tangle_drake.graspability.workmap import View
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.perception.camera import CameraModel, load_camera_json
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

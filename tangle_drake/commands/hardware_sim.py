@@ -8,7 +8,7 @@ import math
 import time
 
 from tangle_drake.commands.arguments import add_scenario_argument, add_seed_argument, scenario_from
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 
 CHECK_TIMEOUT = 10.0
 """Simulated seconds ``--check`` allows its scripted motion."""

@@ -9,7 +9,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.objectives import OBJECTIVES
 
 if TYPE_CHECKING:
@@ -38,8 +38,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from tangle_drake.common.paths import shown_path
     from tangle_drake.dataset import load_samples, read_manifest
-    from tangle_drake.paths import shown_path
     from tangle_drake.tangle_data.ceiling import pick_ceiling
 
     rows = {}

@@ -27,9 +27,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from tangle_drake.paths import check_writable
-    from tangle_drake.pile import check_pile
-    from tangle_drake.scene import make_scene
+    from tangle_drake.common.paths import check_writable
+    from tangle_drake.station.pile import check_pile
+    from tangle_drake.station.scene import make_scene
 
     scenario = scenario_from(args).load()
     for warning in check_pile(scenario):

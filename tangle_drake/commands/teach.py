@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from tangle_drake.commands.arguments import add_seed_argument
-from tangle_drake.workers import add_worker_arguments
+from tangle_drake.common.workers import add_worker_arguments
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -48,7 +48,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
-    from tangle_drake.errors import TangleDrakeError
+    from tangle_drake.common.errors import TangleDrakeError
     from tangle_drake.teach.pipeline import Teacher, TeachSettings
 
     make = TeachSettings.quick if args.quick else TeachSettings

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 
 FORMAT_VERSION = 1
 MANIFEST = "manifest.json"

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.dataset import (
     MANIFEST,
     finished_tasks,
@@ -34,7 +35,6 @@ from tangle_drake.dataset import (
     write_manifest,
 )
 from tangle_drake.dataset import write_shard as write_shard_arrays
-from tangle_drake.errors import TangleDrakeError
 
 COUNTED = ("samples", "tangled", "immediate", "lifts", "empty_region", "lift_errors",
            "candidates", "repeat_lifts", "repeat_all_agree", "repeat_majority", "cpu_s",

@@ -26,8 +26,7 @@ from pydrake.systems.sensors import (
     RgbdSensor,
 )
 
-from tangle_drake.camera import CameraIntrinsics, CameraModel, top_view_pose
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.lcm_io.images import (
     DepthToMillimetres,
     ImageArrayToImages,
@@ -36,6 +35,7 @@ from tangle_drake.lcm_io.images import (
 )
 from tangle_drake.lcm_io.lcm_systems import add_checked_subscriber, add_publisher
 from tangle_drake.lcm_io.messages import check_image_array
+from tangle_drake.perception.camera import CameraIntrinsics, CameraModel, top_view_pose
 from tangle_drake.scenario import Scenario
 from tangle_drake.scenario.drivers import camera_channel
 

@@ -31,7 +31,7 @@ from pydrake.systems.framework import (
 )
 from pydrake.systems.lcm import LcmPublisherSystem
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.lcm_io.lcm_systems import add_checked_subscriber
 from tangle_drake.lcm_io.messages import Received, check_force_torque
 from tangle_drake.scenario.drivers import ForceTorqueSensor

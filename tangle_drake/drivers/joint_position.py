@@ -32,7 +32,7 @@ from pydrake.systems.primitives import (
     StateInterpolatorWithDiscreteDerivative,
 )
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.lcm_io.lcm_systems import (
     GatedPublisher,
     add_checked_subscriber,
@@ -41,7 +41,7 @@ from tangle_drake.lcm_io.lcm_systems import (
 )
 from tangle_drake.lcm_io.messages import check_iiwa_command, check_iiwa_status
 from tangle_drake.lcm_io.watchdog import CommandWatchdog
-from tangle_drake.robot import HOME
+from tangle_drake.robot_model.nextage import HOME
 from tangle_drake.scenario import BinConfig, Scenario
 from tangle_drake.scenario.drivers import GantryDriver, JointPositionDriver, NextageDriver
 from tangle_drake.scenario.hardware import HardwareConfig

@@ -8,10 +8,10 @@ import numpy as np
 from pydrake.multibody.parsing import ModelDirectives, ProcessModelDirectives
 from pydrake.multibody.plant import MultibodyPlant
 
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import make_parser
 from tangle_drake.drivers import joint_position, parallel_jaw
 from tangle_drake.drivers.registry import carrier, gripper
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.paths import make_parser
 from tangle_drake.scenario import Scenario
 
 

@@ -25,8 +25,7 @@ from pydrake.systems.framework import Context, Diagram, DiagramBuilder, OutputPo
 from pydrake.systems.lcm import LcmSubscriberSystem
 from pydrake.systems.primitives import MatrixGain, StateInterpolatorWithDiscreteDerivative
 
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.lcm_io.lcm_systems import (
     GatedPublisher,
     add_checked_subscriber,
@@ -34,7 +33,8 @@ from tangle_drake.lcm_io.lcm_systems import (
     add_publisher,
 )
 from tangle_drake.lcm_io.messages import check_wsg_command, check_wsg_status
-from tangle_drake.robot import GRIPPER_JOINTS
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.robot_model.nextage import GRIPPER_JOINTS
 from tangle_drake.scenario import Scenario
 from tangle_drake.scenario.drivers import ParallelJawDriver
 from tangle_drake.scenario.hardware import HardwareConfig

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from types import ModuleType
 
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.drivers import joint_position, parallel_jaw
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.scenario.drivers import (
     CARRIER_DRIVERS,
     DriverConfig,

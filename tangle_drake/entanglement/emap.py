@@ -34,8 +34,8 @@ from functools import cached_property
 import cv2
 import numpy as np
 
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.entanglement.writhe import writhe_matrix
-from tangle_drake.errors import TangleDrakeError
 
 
 @dataclass(frozen=True)

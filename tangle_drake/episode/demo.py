@@ -15,18 +15,16 @@ from pydrake.geometry import Meshcat, MeshcatParams
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context, EventStatus
 
-from tangle_drake.bin_model import inside_bin
-from tangle_drake.crops import CropSpec
+from tangle_drake.common.errors import SafetyStop, TangleDrakeError
+from tangle_drake.common.graphviz import write_graphviz
 from tangle_drake.episode.episode import Episode
 from tangle_drake.episode.run import (
     SIM_TIME_PER_PICK,
     PickRun,
     RunEnd,
 )
-from tangle_drake.errors import SafetyStop, TangleDrakeError
-from tangle_drake.graphviz import write_graphviz
-from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.parts import load_part
+from tangle_drake.perception.crops import CropSpec
 from tangle_drake.pick.diagram import (
     PickDiagram,
     closed_loop_settings,
@@ -38,8 +36,8 @@ from tangle_drake.pick.outcome import PickRecord, summarize
 from tangle_drake.pick.pick_log import PickLog, pick_log_identity
 from tangle_drake.pick.pictures import PickPictures
 from tangle_drake.pick.planner import PickSettings
-from tangle_drake.pile import check_pile
 from tangle_drake.planning.motions import motion_for
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
 from tangle_drake.scenario import PartCount, Scenario
 from tangle_drake.scenario.files import ScenarioSource, scenario_source
 from tangle_drake.scenario.hardware import IN_PROCESS_URL
@@ -47,6 +45,8 @@ from tangle_drake.selection.choice import TangleChoice, model_part_notice, resol
 from tangle_drake.selection.methods import MethodRun, choice_method
 from tangle_drake.selection.rules import check_rule
 from tangle_drake.station import SimulatedStation, camera_model
+from tangle_drake.station.bin_model import inside_bin
+from tangle_drake.station.pile import check_pile
 from tangle_drake.tangle_cnn.model import load_tangle_model
 
 RECORD_FPS = 20.0

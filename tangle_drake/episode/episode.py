@@ -16,7 +16,7 @@ fingers closed on nothing at the close, judged empty as the top of the lift woul
 (fingers closed past the empty width are empty whatever the lift does:
 :func:`~tangle_drake.pick.outcome.classify_lift`), instead of lifting the empty gripper out:
 the same outcome, without the lift's simulated seconds. And from the descent on it keeps the
-parts the grasp cannot reach frozen (:mod:`tangle_drake.pile_freeze`, the auto-lift
+parts the grasp cannot reach frozen (:mod:`tangle_drake.station.pile_freeze`, the auto-lift
 labeller's rule measured from the grasp: centres farther than ``FREEZE_BEYOND_RADII + 1``
 bounding radii, since the target's centre lies within one radius of its grasp). Keeping the
 whole pile locked through the descent until the fingers touch it was tried and dropped: a
@@ -35,7 +35,6 @@ from pydrake.geometry import Meshcat
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context, Diagram
 
-from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.episode.run import (
     SIM_TIME_PER_PICK,
     Clock,
@@ -48,16 +47,17 @@ from tangle_drake.hardware.hardware_sim import HardwareSim
 from tangle_drake.hardware.loop import HardwareInTheLoop
 from tangle_drake.lcm_io.buses import network_bus_url
 from tangle_drake.parts import load_part
+from tangle_drake.perception.camera import CameraIntrinsics
 from tangle_drake.pick.diagram import build_pick_diagram, closed_loop_settings, pick_settings
 from tangle_drake.pick.outcome import Outcome, PickRecord, classify_lift
 from tangle_drake.pick.planner import Mode, PickSettings
-from tangle_drake.pile import PileSettler, SettledPile
-from tangle_drake.pile_freeze import FREEZE_BEYOND_RADII, PileFreeze, parts_beyond
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import Scenario
 from tangle_drake.selection.methods import Method, MethodRun, selection_wiring
 from tangle_drake.station import SimulatedStation, build_station, camera_model
 from tangle_drake.station.perturb import ContactScaler, PickPhysics
+from tangle_drake.station.pile import PileSettler, SettledPile
+from tangle_drake.station.pile_freeze import FREEZE_BEYOND_RADII, PileFreeze, parts_beyond
 
 FLOATING_SIM_LIMIT = 20.0
 """Simulated seconds a floating-gripper pick may take: several times what one takes, so only a

@@ -8,8 +8,8 @@ Candidate conventions:
   - ``depth_m``: camera-frame depth (along +z) of the fingertips at the grasp; for a height
     map, the depth below the height of its brightest possible grey level;
   - ``score``: in [0, 1], see :mod:`.ranking`;
-  - ``pose``: ``X_WT``, the tool frame T of :mod:`tangle_drake.gripper` in the world, a 4x4
-    matrix: origin at T (between the finger pads, half a pad above the fingertips), +z along
+  - ``pose``: ``X_WT``, the tool frame T of :mod:`tangle_drake.robot_model.gripper` in the world,
+    a 4x4 matrix: origin at T (between the finger pads, half a pad above the fingertips), +z along
     the approach (the camera's +z), +y along the closing direction. ``None`` where no camera
     pose is known (height maps, or bare intrinsics);
   - ``height_m``: height maps only, the fingertips' height above grey level 0.
@@ -23,8 +23,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from tangle_drake.camera import CameraIntrinsics, CameraModel
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.graspability.hand import HandModel, as_hand
 from tangle_drake.graspability.index import GraspMaps, grasp_maps
 from tangle_drake.graspability.inputs import check_depth, check_scale, height_map_to_depth
@@ -32,7 +31,8 @@ from tangle_drake.graspability.params import GraspabilityParams
 from tangle_drake.graspability.ranking import Peak, best_grasps
 from tangle_drake.graspability.roi import Rect, roi_mask
 from tangle_drake.graspability.workmap import View, WorkMap, build_work_map
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.perception.camera import CameraIntrinsics, CameraModel
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 
 MapsFunction = Callable[[WorkMap, HandModel, GraspabilityParams], GraspMaps]
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 
 _EPS = 1e-9
 """Slack for cell centres that fall exactly on a mask's edge (they belong to the mask)."""

@@ -13,8 +13,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.perception.camera import CameraIntrinsics
 
 DEPTH_SUFFIXES = (".npy", ".tif", ".tiff")
 HEIGHT_MAP_SUFFIXES = (".png",)

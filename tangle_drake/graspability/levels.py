@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.graspability.hand import HandModel
 from tangle_drake.graspability.params import GraspabilityParams
 from tangle_drake.graspability.workmap import WorkMap

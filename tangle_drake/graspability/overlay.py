@@ -11,11 +11,11 @@ import math
 import cv2
 import numpy as np
 
-from tangle_drake.camera import CameraIntrinsics
 from tangle_drake.graspability.candidates import GraspCandidate
 from tangle_drake.graspability.hand import HandModel
 from tangle_drake.graspability.workmap import View
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.perception.camera import CameraIntrinsics
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
 
 _COLOURS = ((0, 200, 0), (0, 200, 255), (0, 140, 255), (0, 60, 255), (200, 0, 200))
 """BGR by rank: green for the best, then yellow to red, magenta for the rest."""

@@ -13,8 +13,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from tangle_drake.camera import CameraModel
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.perception.camera import CameraModel
 
 Rect = tuple[int, int, int, int]
 """``(u0, v0, u1, v1)``: pixels with ``u0 <= u < u1`` and ``v0 <= v < v1``."""

@@ -14,7 +14,7 @@ import math
 import cv2
 import numpy as np
 
-from tangle_drake.camera import CameraIntrinsics, CameraModel, top_view_pose
+from tangle_drake.perception.camera import CameraIntrinsics, CameraModel, top_view_pose
 
 
 class HeightField:

@@ -8,12 +8,12 @@ from pydrake.common.value import AbstractValue, Value
 from pydrake.systems.framework import Context, LeafSystem
 from pydrake.systems.sensors import ImageDepth32F
 
-from tangle_drake.camera import CameraModel
 from tangle_drake.graspability.candidates import compute_candidates
 from tangle_drake.graspability.hand import HandModel
 from tangle_drake.graspability.params import GraspabilityParams
 from tangle_drake.graspability.roi import Rect
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.perception.camera import CameraModel
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 
 
 class GraspabilitySystem(LeafSystem):

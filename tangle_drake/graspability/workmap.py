@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.perception.camera import CameraIntrinsics
 
 
 @dataclass(frozen=True)

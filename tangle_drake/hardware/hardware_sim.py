@@ -23,9 +23,9 @@ from pydrake.systems.lcm import LcmBuses
 from tangle_drake.drivers import camera, force_torque
 from tangle_drake.drivers.registry import driver_module
 from tangle_drake.lcm_io.buses import BusFinder
-from tangle_drake.pile import PileReport, PileSettler
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import SimulatedStation, build_station
+from tangle_drake.station.pile import PileReport, PileSettler
 
 
 @dataclass

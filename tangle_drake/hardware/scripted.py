@@ -25,8 +25,8 @@ from pydrake.systems.framework import (
 
 from tangle_drake.drivers.joint_position import home_positions
 from tangle_drake.drivers.registry import carrier
-from tangle_drake.gripper import DEFAULT_GRIPPER
-from tangle_drake.robot import HOME, INIT_RTM
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
+from tangle_drake.robot_model.nextage import HOME, INIT_RTM
 from tangle_drake.scenario import Scenario
 from tangle_drake.scenario.drivers import NextageDriver
 

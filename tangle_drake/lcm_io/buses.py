@@ -6,7 +6,7 @@ from pydrake.lcm import DrakeLcm, DrakeLcmInterface
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.lcm import LcmBuses, LcmInterfaceSystem
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.scenario import Scenario
 from tangle_drake.scenario.hardware import IN_PROCESS_URL
 

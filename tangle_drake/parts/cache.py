@@ -19,7 +19,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from tangle_drake.paths import cache_dir
+from tangle_drake.common.paths import cache_dir
 
 # Bump whenever generated files or their metadata change meaning: old entries are then ignored.
 FORMAT_VERSION = 3

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.parts import build, cache, mesh_import, wire
 from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_color, builtin_spec
 

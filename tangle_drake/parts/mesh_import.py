@@ -13,7 +13,7 @@ import coacd
 import numpy as np
 import trimesh
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 
 MESH_SUFFIXES: tuple[str, ...] = (".obj", ".stl", ".ply")
 

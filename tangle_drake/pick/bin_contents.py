@@ -17,7 +17,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem
 from pydrake.systems.sensors import ImageDepth32F
 
-from tangle_drake.camera import CameraModel
+from tangle_drake.perception.camera import CameraModel
 from tangle_drake.scenario import BinConfig
 
 CELL = 0.004

@@ -2,7 +2,7 @@
 
 The planner tries candidates in the selection's order (``scored_candidates``, best first,
 with ``selected_grasp`` at the front). A candidate is turned down, with its
-:class:`~tangle_drake.failures.FailureKind`, if it has no world pose, if it repeats a grasp
+:class:`~tangle_drake.common.failures.FailureKind`, if it has no world pose, if it repeats a grasp
 that came up empty where the pile has not changed since (same place and closing direction,
 fingertips at the same depth), or if the ``Motion`` cannot plan it.
 """
@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from tangle_drake.failures import FailureKind
+from tangle_drake.common.failures import FailureKind
 from tangle_drake.pick.outcome import PickRecord, Rejection
 from tangle_drake.planning.motion import Motion, PickMotion, PlanningError
 from tangle_drake.selection.rules import ScoredCandidate

@@ -11,7 +11,7 @@ import numpy as np
 from pydrake.systems.framework import Context
 from pydrake.trajectories import PiecewisePolynomial
 
-from tangle_drake.failures import FailureKind
+from tangle_drake.common.failures import FailureKind
 from tangle_drake.pick.modes import Loop, Mode, PlannerState
 from tangle_drake.pick.outcome import Outcome, PickRecord
 from tangle_drake.pick.payload import PayloadEstimate, PayloadPhase, PayloadRequest

@@ -21,15 +21,13 @@ from dataclasses import dataclass, replace
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
-from tangle_drake.bin_model import inner_corners
-from tangle_drake.camera import CameraModel
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.drivers.parallel_jaw import empty_grasp_width
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.graspability import FINGER_GRIP_SPAN_M, GraspabilityParams, bin_roi
 from tangle_drake.graspability.system import GraspabilitySystem
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.parts import load_part
 from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_spec
+from tangle_drake.perception.camera import CameraModel
 from tangle_drake.pick.bin_contents import BinContentsSystem
 from tangle_drake.pick.load_path import LoadPathMonitor
 from tangle_drake.pick.outcome import LiftMonitor, TrayMonitor
@@ -43,9 +41,11 @@ from tangle_drake.pick.planner import PickPlanner, PickSettings
 from tangle_drake.pick.recovery import RecoverySettings
 from tangle_drake.pick.truth import PickTruth
 from tangle_drake.planning.motion import Motion
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
 from tangle_drake.scenario.pick import tuned
 from tangle_drake.station import SimulatedStation, build_station, camera_model
+from tangle_drake.station.bin_model import inner_corners
 
 WRIST = "wrist"
 """The force/torque sensor the closed loop weighs with (``force_torque_sensors.wrist``)."""

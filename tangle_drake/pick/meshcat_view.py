@@ -19,9 +19,9 @@ from pydrake.math import RigidTransform
 from pydrake.systems.framework import Context
 
 from tangle_drake.drivers.registry import carrier
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.pick.diagram import PickDiagram
 from tangle_drake.pick.outcome import PickRecord
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.scenario import BinConfig, Scenario
 from tangle_drake.scenario.drivers import NextageDriver
 

@@ -8,14 +8,14 @@ from dataclasses import dataclass, field
 import numpy as np
 from pydrake.trajectories import PiecewisePolynomial
 
-from tangle_drake.crops import CropSpec
 from tangle_drake.drivers.parallel_jaw import empty_grasp_width
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.perception.crops import CropSpec
 from tangle_drake.pick.choose import EmptyGrasp, RepeatRule
 from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.pick.payload import PayloadRequest
 from tangle_drake.pick.recovery import RecoverySettings
 from tangle_drake.planning.motion import PickMotion
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
 
 
 class Mode(enum.Enum):

@@ -19,12 +19,12 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import BasicVector, Context, LeafSystem
 
-from tangle_drake.bin_model import inside_bin
-from tangle_drake.failures import FailureKind
+from tangle_drake.common.failures import FailureKind
 from tangle_drake.pick.payload import PayloadEstimate
 from tangle_drake.pick.recovery import Disposition, Recovery, Verdict
 from tangle_drake.scenario import BinConfig
 from tangle_drake.station import part_bodies
+from tangle_drake.station.bin_model import inside_bin
 
 
 class Outcome(enum.Enum):

@@ -13,8 +13,8 @@ from dataclasses import replace
 import numpy as np
 from pydrake.systems.framework import Context
 
-from tangle_drake.crops import candidate_crops
-from tangle_drake.failures import FailureKind, pick_failure
+from tangle_drake.common.failures import FailureKind, pick_failure
+from tangle_drake.perception.crops import candidate_crops
 from tangle_drake.pick.choose import choose, rank_scored
 from tangle_drake.pick.modes import Mode, PlannerState
 from tangle_drake.pick.outcome import VIEW_CANDIDATES, PickRecord, PickView

@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from tangle_drake.crops import CropSpec
 from tangle_drake.dataset.store import DatasetStore, TaskResult
-from tangle_drake.gripper import GripperSpec
+from tangle_drake.perception.crops import CropSpec
 from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.pick.recovery import Verdict
+from tangle_drake.robot_model.gripper import GripperSpec
 
 SOURCE = "pick log"
 """The manifest's ``source`` of a pick log (a collection has none)."""

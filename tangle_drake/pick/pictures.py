@@ -20,9 +20,9 @@ import numpy as np
 from pydrake.systems.framework import Context
 from pydrake.systems.sensors import CameraConfig
 
-from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.graspability.overlay import top_view
+from tangle_drake.perception.camera import CameraIntrinsics
 from tangle_drake.pick.diagram import PickDiagram
 from tangle_drake.pick.outcome import Outcome, PickRecord
 from tangle_drake.pick.planner import Mode

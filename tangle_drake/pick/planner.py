@@ -90,8 +90,8 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
 from pydrake.systems.sensors import ImageDepth32F
 
-from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.failures import FailureKind
+from tangle_drake.common.failures import FailureKind
+from tangle_drake.perception.camera import CameraIntrinsics
 from tangle_drake.pick.choose import EmptyGrasp, rank_scored
 from tangle_drake.pick.closed_loop import FALLBACK, ClosedLoop, with_reason
 from tangle_drake.pick.modes import Mode, PickSettings, PlannerState

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.pick.bin_contents import BinContents
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 
 RIM_CLEARANCE = 0.02
 """The fingertips start and end the sweep this far above the rim, m."""

@@ -20,7 +20,7 @@ import numpy as np
 from pydrake.math import RigidTransform
 from pydrake.trajectories import PiecewisePolynomial
 
-from tangle_drake.failures import FailureKind
+from tangle_drake.common.failures import FailureKind
 from tangle_drake.planning.grasp_poses import (
     ApproachSettings,
     pick_poses,
@@ -36,7 +36,7 @@ from tangle_drake.planning.trajectory import (
     rest_to_rest,
     through_waypoints,
 )
-from tangle_drake.robot import (
+from tangle_drake.robot_model.nextage import (
     HOME,
     NEXTAGE_JOINTS,
     PLANNING_ACCELERATION_LIMIT,

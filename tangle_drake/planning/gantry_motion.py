@@ -15,15 +15,15 @@ import numpy as np
 from pydrake.math import RigidTransform
 from pydrake.trajectories import PiecewisePolynomial
 
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.failures import FailureKind
 from tangle_drake.drivers.joint_position import gantry_home
 from tangle_drake.drivers.limits import RobotLimits
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.failures import FailureKind
-from tangle_drake.gripper import DEFAULT_GRIPPER
 from tangle_drake.planning.grasp_poses import ApproachSettings, pick_poses
 from tangle_drake.planning.motion import PickMotion, PlanningError, ShakeSettings, StirMotion
 from tangle_drake.planning.trajectory import MIN_DURATION, chain, hold, rest_to_rest
-from tangle_drake.robot import PLANNING_SLOW_SPEED
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
+from tangle_drake.robot_model.nextage import PLANNING_SLOW_SPEED
 from tangle_drake.scenario import BinConfig
 
 VELOCITY = np.array([0.5, 0.5, 0.5, 2.0])

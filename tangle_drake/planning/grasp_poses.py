@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.math import RigidTransform, RotationMatrix
 
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.scenario import BinConfig
 
 

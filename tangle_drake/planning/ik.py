@@ -18,7 +18,7 @@ from pydrake.multibody.inverse_kinematics import InverseKinematics
 from pydrake.solvers import Solve
 
 from tangle_drake.planning.planning_model import PlanningModel
-from tangle_drake.robot import HOME, INIT_RTM
+from tangle_drake.robot_model.nextage import HOME, INIT_RTM
 
 _INFLUENCE_MARGIN = 0.02
 """Pairs closer than the bound plus this shape the distance constraint's gradient, m."""

@@ -15,7 +15,7 @@ from typing import Protocol
 import numpy as np
 from pydrake.trajectories import PiecewisePolynomial
 
-from tangle_drake.failures import FailureKind
+from tangle_drake.common.failures import FailureKind
 
 
 class PlanningError(Exception):

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from tangle_drake.bin_model import release_point
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.drivers.limits import station_limits
 from tangle_drake.drivers.registry import carrier
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.planning.motion import Motion
 from tangle_drake.scenario import Scenario
 from tangle_drake.scenario.drivers import GantryDriver, NextageDriver
+from tangle_drake.station.bin_model import release_point
 
 
 def scenario_mode(scenario: Scenario, source: str) -> str:

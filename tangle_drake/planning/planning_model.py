@@ -19,15 +19,15 @@ from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder
 
-from tangle_drake.bin_model import bin_sdf
+from tangle_drake.common.paths import make_parser
 from tangle_drake.drivers.parallel_jaw import finger_positions
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
-from tangle_drake.paths import make_parser
-from tangle_drake.robot import LEFT_ARM, NEXTAGE_JOINTS, add_nextage_with_gripper
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.robot_model.nextage import LEFT_ARM, NEXTAGE_JOINTS, add_nextage_with_gripper
 from tangle_drake.scenario import BinConfig
+from tangle_drake.station.bin_model import bin_sdf
 
 TCP_FRAME = "gripper_tcp"
-"""The gripper model's frame at the tool centre T (:mod:`tangle_drake.gripper`)."""
+"""The gripper model's frame at the tool centre T (:mod:`tangle_drake.robot_model.gripper`)."""
 
 DISTANCE_HORIZON = 0.05
 """Geometry pairs farther apart than this are not measured, m (a cap that keeps checks fast)."""

@@ -1,8 +1,9 @@
-"""Generator of the shipped Nextage + parallel-jaw gripper model files.
+"""The robot: the gripper's dimensions (:mod:`.gripper`), the Nextage's joints and poses
+(:mod:`.nextage`), and the generator of the shipped Nextage + parallel-jaw gripper model files.
 
 The kinematic table of the Nextage (``shared/reference/nextage.md``) is written down in
 :mod:`.kinematics` and nowhere else; the URDF (:mod:`.urdf`, with :mod:`.links`' primitives),
-the gripper SDF (:mod:`.gripper_sdf`, from :class:`tangle_drake.gripper.GripperSpec`), the
+the gripper SDF (:mod:`.gripper_sdf`, from :class:`.gripper.GripperSpec`), the
 model directives and ``package.xml`` under ``models/nextage/`` are generated from it so that
 the numbers cannot drift apart. Inertias come from the primitives' geometry, scaled to the
 table's masses.
@@ -16,7 +17,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.robot_model.gripper_sdf import gripper_sdf
 from tangle_drake.robot_model.kinematics import (
     FLANGE_OFFSET,

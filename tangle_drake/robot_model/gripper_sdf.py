@@ -1,4 +1,4 @@
-"""The parallel-jaw gripper's SDF, written from :class:`tangle_drake.gripper.GripperSpec`."""
+"""The parallel-jaw gripper's SDF, written from :class:`.gripper.GripperSpec`."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import xml.etree.ElementTree as ET
 from pydrake.geometry import Box
 from pydrake.multibody.tree import CalcSpatialInertia
 
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.robot_model.writers import GENERATED, num, nums, xml_text
 
 FINGER_MU = 0.9

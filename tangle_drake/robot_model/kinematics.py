@@ -81,7 +81,7 @@ def _mirror(joint: JointSpec) -> JointSpec:
 JOINTS: tuple[JointSpec, ...] = (
     _TORSO_JOINTS + _LEFT_ARM_JOINTS + tuple(_mirror(j) for j in _LEFT_ARM_JOINTS)
 )
-"""All 15 joints, in the order of ``tangle_drake.robot.NEXTAGE_JOINTS``."""
+"""All 15 joints, in the order of ``tangle_drake.robot_model.nextage.NEXTAGE_JOINTS``."""
 
 INIT_RTM_LEFT_ARM = (0.010472, 0.0, -1.745329, -0.265290, 0.164061, -0.055851)
 """The named pose ``init_rtm`` of LARM_JOINT0..5 (chest and head at 0)."""

@@ -23,8 +23,8 @@ from pydrake.multibody.parsing import (
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.sensors import CameraConfig
 
-from tangle_drake.errors import SEED_LIMIT, TangleDrakeError
-from tangle_drake.paths import register_packages
+from tangle_drake.common.errors import SEED_LIMIT, TangleDrakeError
+from tangle_drake.common.paths import register_packages
 from tangle_drake.scenario.drivers import (
     DriverConfig,
     ForceTorqueSensor,

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 from pydrake.systems.sensors import CameraConfig
 
-from tangle_drake.gripper import DEFAULT_GRIPPER
-from tangle_drake.robot import (
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
+from tangle_drake.robot_model.nextage import (
     PLANNING_ACCELERATION_LIMIT,
     PLANNING_SLOW_SPEED,
     PLANNING_VELOCITY_LIMIT,

@@ -10,8 +10,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.paths import diagrams_dir
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import diagrams_dir
 from tangle_drake.scenario import Scenario, load_scenario, parse_scenario
 from tangle_drake.scenario.yaml_io import dump, merge, read_mapping
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from pydrake.lcm import DrakeLcmParams
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 
 IN_PROCESS_URL = "memq://"
 """LCM's in-process transport: messages never leave the process that made the ``DrakeLcm``."""

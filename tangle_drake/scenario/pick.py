@@ -13,7 +13,7 @@ changes that one value.
 import dataclasses
 from dataclasses import dataclass, field
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 
 
 @dataclass

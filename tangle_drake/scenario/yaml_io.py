@@ -8,7 +8,7 @@ import typing
 import yaml
 from pydrake.common.yaml import yaml_load_typed
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 
 
 class Tagged(typing.NamedTuple):

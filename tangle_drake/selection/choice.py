@@ -11,10 +11,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import shown_path
 from tangle_drake.parts import load_part
 from tangle_drake.parts.library import PART_FILE_SUFFIX
-from tangle_drake.paths import shown_path
 from tangle_drake.selection.rules import check_rule, needs_model
 from tangle_drake.tangle_cnn.objectives import (
     DEFAULT_OBJECTIVE,

@@ -30,7 +30,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem, ValueProducer
 from pydrake.systems.sensors import ImageDepth32F
 
-from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.perception.camera import CameraIntrinsics
 from tangle_drake.selection.rules import ScoredCandidate, check_rule, rank_candidates
 from tangle_drake.tangle_cnn.model import TangleModel, load_tangle_model
 from tangle_drake.tangle_cnn.objectives import check_serves

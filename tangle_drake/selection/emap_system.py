@@ -31,9 +31,9 @@ from pydrake.systems.framework import (
 )
 from pydrake.systems.sensors import ImageDepth32F
 
-from tangle_drake.camera import CameraIntrinsics
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.entanglement.emap import EmapParams, EntanglementMap, entanglement_map
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.perception.camera import CameraIntrinsics
 from tangle_drake.selection.rules import (
     EMAP_RULES,
     ScoredCandidate,

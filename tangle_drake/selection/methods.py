@@ -22,10 +22,9 @@ from typing import Any, NamedTuple
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem, OutputPort
 
-from tangle_drake.bin_model import inner_corners
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import shown_path
 from tangle_drake.graspability.roi import bin_roi
-from tangle_drake.paths import shown_path
 from tangle_drake.scenario import Scenario
 from tangle_drake.selection.choice import (
     TangleChoice,
@@ -48,6 +47,7 @@ from tangle_drake.selection.rules import (
     rank_candidates,
 )
 from tangle_drake.station import camera_model
+from tangle_drake.station.bin_model import inner_corners
 from tangle_drake.station.perturb import offset_pose
 from tangle_drake.tangle_cnn.objectives import (
     DEFAULT_RULES,

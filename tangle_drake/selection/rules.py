@@ -44,7 +44,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.selection.registry import EMAP_RULES, MODEL_RULES, RULES
 from tangle_drake.tangle_cnn.objectives import rule_objective
 

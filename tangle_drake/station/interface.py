@@ -25,10 +25,10 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.lcm import LcmBuses, LcmSubscriberSystem
 
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.drivers import camera, force_torque, joint_position, parallel_jaw
 from tangle_drake.drivers.limits import station_limits
 from tangle_drake.drivers.registry import carrier, gripper
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.lcm_io.buses import BusFinder
 from tangle_drake.scenario import Scenario
 from tangle_drake.scenario.drivers import camera_channel

@@ -23,7 +23,7 @@ from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import Body
 from pydrake.systems.framework import Context
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 
 
 @dataclass(frozen=True)

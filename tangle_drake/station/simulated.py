@@ -20,13 +20,13 @@ from pydrake.multibody.tree import Body, ModelInstanceIndex
 from pydrake.systems.framework import Context, Diagram, DiagramBuilder
 from pydrake.systems.sensors import CameraConfig
 
-from tangle_drake.bin_model import bin_boxes, bin_sdf
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import make_parser
 from tangle_drake.drivers import camera, force_torque
 from tangle_drake.drivers.registry import driver_module
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import load_part
-from tangle_drake.paths import make_parser
 from tangle_drake.scenario import Scenario
+from tangle_drake.station.bin_model import bin_boxes, bin_sdf
 
 PLANT_NAME = "plant"
 PILE_SCOPE = "pile"

@@ -1,7 +1,8 @@
 """The tangle CNN (paper section III-C): does this grasp lift one and only one part?
 
-A small AlexNet-like classifier of the rotated metric depth crop (``tangle_drake.crops``; all
-the candidates of one image: ``crops.candidate_crops``) that outputs P(not tangled) per grasp
+A small AlexNet-like classifier of the rotated metric depth crop
+(``tangle_drake.perception.crops``; all the candidates of one image:
+``crops.candidate_crops``) that outputs P(not tangled) per grasp
 candidate, and its training (``tangle-drake train``); the rules that combine it with
 graspability, and the Drake system that scores candidates with it, are
 :mod:`tangle_drake.selection`'s. Modules import torch only where they need it, so this

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tangle_drake.stats import wilson
+from tangle_drake.common.stats import wilson
 from tangle_drake.tangle_cnn.checkpoint import MODEL_KIND, read_checkpoint
 from tangle_drake.tangle_cnn.evaluate import calibration_error
 from tangle_drake.tangle_cnn.objectives import TANGLED, objective_named

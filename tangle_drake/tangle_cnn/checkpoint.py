@@ -38,8 +38,8 @@ from pathlib import Path
 
 import torch
 
-from tangle_drake.crops import CropSpec
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.perception.crops import CropSpec
 from tangle_drake.tangle_cnn.network import NetworkConfig, TangleNet
 from tangle_drake.tangle_cnn.normalise import Normalisation
 from tangle_drake.tangle_cnn.objectives import DEFAULT_OBJECTIVE

@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from tangle_drake.crops import CropSpec
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.stats import wilson
 from tangle_drake.dataset import stored_fields
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.stats import wilson
+from tangle_drake.perception.crops import CropSpec
 from tangle_drake.tangle_cnn.metrics import balanced_accuracy, binary_metrics, class_metrics
 from tangle_drake.tangle_cnn.model import TangleModel
 from tangle_drake.tangle_cnn.objectives import TANGLED
@@ -155,7 +155,7 @@ def evaluate_model(model: TangleModel, directory: Path,
                    progress: Callable[[int], None] | None = None) -> Evaluation:
     """Score every sample of ``directory`` (or, for the model's own training data, its
     validation piles) with ``model``; ``progress(n)`` is told of each batch of n samples."""
-    from tangle_drake.paths import shown_path  # imports pydrake
+    from tangle_drake.common.paths import shown_path  # imports pydrake
 
     directory = Path(directory)
     causes = CAUSE_FIELDS if set(CAUSE_FIELDS) <= stored_fields(directory) else ()

@@ -9,9 +9,9 @@ from typing import Any
 import numpy as np
 import torch
 
-from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.crops import CropSpec, candidate_crops
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.perception.camera import CameraIntrinsics
+from tangle_drake.perception.crops import CropSpec, candidate_crops
 from tangle_drake.tangle_cnn.checkpoint import network_from, read_checkpoint
 from tangle_drake.tangle_cnn.network import TangleNet
 from tangle_drake.tangle_cnn.normalise import Normalisation

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 
 
 @dataclass(frozen=True)

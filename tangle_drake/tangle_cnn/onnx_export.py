@@ -23,7 +23,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.model import TangleModel, reweighted
 from tangle_drake.tangle_cnn.network import TangleNet
 from tangle_drake.tangle_cnn.normalise import Normalisation

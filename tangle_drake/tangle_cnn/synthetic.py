@@ -15,9 +15,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from tangle_drake.crops import CropSpec
 from tangle_drake.dataset import SAMPLE_FIELDS, write_manifest, write_shard
-from tangle_drake.gripper import DEFAULT_GRIPPER
+from tangle_drake.perception.crops import CropSpec
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
 
 FLOOR_M = 0.80
 GRASP_DEPTH_M = 0.79

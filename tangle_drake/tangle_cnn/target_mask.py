@@ -27,8 +27,8 @@ from typing import Any
 import cv2
 import numpy as np
 
-from tangle_drake.crops import CropSpec
-from tangle_drake.gripper import GripperSpec
+from tangle_drake.perception.crops import CropSpec
+from tangle_drake.robot_model.gripper import GripperSpec
 
 _FILLED = 2
 """Value the flood fill writes into its mask (1 marks the blocked floor)."""

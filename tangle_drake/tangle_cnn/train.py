@@ -31,8 +31,8 @@ import torch
 from torch import nn
 from tqdm import tqdm
 
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.paths import check_writable
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import check_writable
 from tangle_drake.tangle_cnn.augment import augment_batch
 from tangle_drake.tangle_cnn.checkpoint import (
     FORMAT_VERSION,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.tangle_cnn.objectives import DEFAULT_OBJECTIVE, objective_named
 from tangle_drake.tangle_cnn.split import BALANCES
 

@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from tangle_drake.crops import CropSpec
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.dataset import load_samples, read_manifest, stored_fields
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.perception.crops import CropSpec
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.tangle_cnn.normalise import Normalisation
 from tangle_drake.tangle_cnn.objectives import TANGLED, Objective
 from tangle_drake.tangle_cnn.split import balanced_rows, loss_weights, split_by_pile
@@ -98,7 +98,7 @@ def load_training_data(directory: Path, normalisation: Normalisation,
     out each part's classes as ``balance`` says (``split.BALANCES``); ``target_mask`` alone
     decides whether the inputs get the target-mask channel (fitted to the data's hand and
     crop), whatever mask ``normalisation`` held."""
-    from tangle_drake.paths import shown_path  # imports pydrake
+    from tangle_drake.common.paths import shown_path  # imports pydrake
 
     directory = Path(directory)
     samples, crop, manifest = load_checked_samples(directory, objective=objective)

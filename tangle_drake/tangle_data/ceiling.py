@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tangle_drake.common.stats import PairedDifference, paired_difference, wilson
 from tangle_drake.pick.outcome import Outcome
 from tangle_drake.selection.rules import rank
-from tangle_drake.stats import PairedDifference, paired_difference, wilson
 from tangle_drake.tangle_data.physical import OUTCOME_CODES
 
 ONE = OUTCOME_CODES[Outcome.ONE]

@@ -1,8 +1,8 @@
 """Which parts lie in the gripper's closing region: from the parts' geometry, not the image.
 
 The closing region is the box between the open fingers, in the grasp (tool) frame T of
-:mod:`tangle_drake.gripper`: ``opening`` long along the closing direction (y), one finger
-``width`` across it (x), and from the fingertips (``+pad_length/2`` along the approach, z)
+:mod:`tangle_drake.robot_model.gripper`: ``opening`` long along the closing direction (y), one
+finger ``width`` across it (x), and from the fingertips (``+pad_length/2`` along the approach, z)
 up to the palm. A part is in it when a point of its surface lies inside the box shrunk by
 ``margin`` on every side but the top.
 
@@ -19,9 +19,9 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.gripper import GripperSpec
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.parts import PartModel
+from tangle_drake.robot_model.gripper import GripperSpec
 
 SURFACE_SAMPLES = 3000
 """Random surface points per part, on top of the mesh's vertices (spacing ~1-2 mm)."""

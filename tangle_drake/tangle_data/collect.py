@@ -19,15 +19,17 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from tangle_drake import __version__
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import diagrams_dir
+from tangle_drake.common.workers import start_workers
 from tangle_drake.dataset.store import DatasetStore, TaskResult
-from tangle_drake.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, PartModel, load_part
 from tangle_drake.parts.library import part_digest
-from tangle_drake.paths import diagrams_dir
-from tangle_drake.pile import check_pile
 from tangle_drake.planning.motions import scenario_mode
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import camera_model
+from tangle_drake.station.pile import check_pile
+from tangle_drake.tangle_data.collect_progress import LIFT_SHARES, CollectProgress
 from tangle_drake.tangle_data.physical import (
     PICK_SCENARIO,
     PICK_SHARES,
@@ -35,10 +37,8 @@ from tangle_drake.tangle_data.physical import (
     PickDataSettings,
     pick_data_scenario,
 )
-from tangle_drake.tangle_data.progress import LIFT_SHARES, CollectProgress
 from tangle_drake.tangle_data.settings import CollectSettings
 from tangle_drake.tangle_data.simulator import TangleDataSimulator, data_scenario
-from tangle_drake.workers import start_workers
 
 DATA_SCENARIO = "tangle_data.yaml"
 

@@ -22,8 +22,8 @@ from pydrake.multibody.plant import ExternallyAppliedSpatialForce, MultibodyPlan
 from pydrake.systems.analysis import Simulator
 
 from tangle_drake.parts import PartModel
-from tangle_drake.pile_freeze import PileFreeze, parts_beyond
 from tangle_drake.scenario import BinConfig
+from tangle_drake.station.pile_freeze import PileFreeze, parts_beyond
 from tangle_drake.tangle_data.settings import LiftSettings
 from tangle_drake.tangle_data.support import Support, classify_support
 
@@ -154,7 +154,7 @@ class ForceLift:
 
     def _far_from(self, target: int, context) -> list[int]:
         """Parts to freeze for this lift (see ``LiftSettings.freeze_beyond_radii``): far from
-        the target, and in the bin (:mod:`tangle_drake.pile_freeze`)."""
+        the target, and in the bin (:mod:`tangle_drake.station.pile_freeze`)."""
         factor = self.settings.freeze_beyond_radii
         if factor == 0:
             return []

@@ -28,14 +28,14 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.crops import DEFAULT_CROP, CropSpec, extract_crop
+from tangle_drake.common.errors import TangleDrakeError, check_seed
+from tangle_drake.common.failures import FailureKind
 from tangle_drake.dataset import rows_to_arrays
 from tangle_drake.dataset.store import TaskResult
 from tangle_drake.episode.episode import Episode, PhysicalPick
-from tangle_drake.errors import TangleDrakeError, check_seed
-from tangle_drake.failures import FailureKind
 from tangle_drake.parts import load_part
+from tangle_drake.perception.camera import CameraIntrinsics
+from tangle_drake.perception.crops import DEFAULT_CROP, CropSpec, extract_crop
 from tangle_drake.pick import pick_log
 from tangle_drake.pick.outcome import Outcome
 from tangle_drake.pick.recovery import Verdict

@@ -10,10 +10,10 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field
 
-from tangle_drake.crops import DEFAULT_CROP, CropSpec
-from tangle_drake.errors import TangleDrakeError, check_seed
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
-from tangle_drake.pile_freeze import FREEZE_BEYOND_RADII
+from tangle_drake.common.errors import TangleDrakeError, check_seed
+from tangle_drake.perception.crops import DEFAULT_CROP, CropSpec
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.station.pile_freeze import FREEZE_BEYOND_RADII
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,7 @@ class LiftSettings:
     freeze_beyond_radii: float = FREEZE_BEYOND_RADII
     """Parts whose centre lies farther than this many bounding radii (horizontally) from
     the target's are locked in place during the lift (why it is safe:
-    :data:`~tangle_drake.pile_freeze.FREEZE_BEYOND_RADII`). Each step costs markedly less. 0
+    :data:`~tangle_drake.station.pile_freeze.FREEZE_BEYOND_RADII`). Each step costs markedly less. 0
     keeps every part free."""
     early_exit: bool = True
     """End the lift as soon as its record cannot change any more (the target and what it

@@ -14,18 +14,18 @@ import time
 
 import numpy as np
 
-from tangle_drake.bin_model import inner_corners, inside_bin
-from tangle_drake.crops import extract_crop
 from tangle_drake.dataset.store import TaskResult
 from tangle_drake.graspability import GraspabilityParams, GraspCandidate, bin_roi
 from tangle_drake.graspability import compute_candidates as graspability_candidates
 from tangle_drake.parts import load_part
-from tangle_drake.pile import PileSettler
-from tangle_drake.pile_freeze import PileFreeze
+from tangle_drake.perception.crops import extract_crop
 from tangle_drake.scenario import PartCount, Scenario, parse_scenario
-from tangle_drake.scene import render_depth
 from tangle_drake.station import build_station, camera_model
+from tangle_drake.station.bin_model import inner_corners, inside_bin
 from tangle_drake.station.perturb import ContactScaler, Perturbation, jiggle_parts
+from tangle_drake.station.pile import PileSettler
+from tangle_drake.station.pile_freeze import PileFreeze
+from tangle_drake.station.scene import render_depth
 from tangle_drake.tangle_data.closing_region import RegionBox, parts_in_region, surface_points
 from tangle_drake.tangle_data.labels import PickLabel, label_pick
 from tangle_drake.tangle_data.lift import ForceLift, LiftResult

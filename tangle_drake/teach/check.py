@@ -18,15 +18,15 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.parts import BUILTIN_PARTS, cache, load_part
 from tangle_drake.parts.build import wire_body
 from tangle_drake.parts.catalog import builtin_spec
 from tangle_drake.parts.library import PART_FILE_SUFFIX, STEEL_DENSITY, read_part_file
 from tangle_drake.parts.mesh_import import MESH_SUFFIXES
-from tangle_drake.pile import PileReport, check_pile
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.scenario import PartCount, Scenario
+from tangle_drake.station.pile import PileReport, check_pile
 
 MIN_THICKNESS_M = 0.0005
 """A part thinner than this in every direction but two is a flat sheet: no volume to weigh

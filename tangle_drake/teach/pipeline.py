@@ -32,9 +32,9 @@ from pathlib import Path
 
 import trimesh
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.common.paths import shown_path
 from tangle_drake.parts import BUILTIN_PARTS, load_part
-from tangle_drake.paths import shown_path
 from tangle_drake.selection.choice import trained_model_path
 from tangle_drake.tangle_cnn.train_settings import TRAIN_THREADS
 from tangle_drake.teach.check import (
@@ -224,7 +224,7 @@ class Teacher:
 
     def _pile(self, check: PartCheck, scenario) -> PartCheck:
         """Write the part file and the pictures; ``check`` with how a settled pile went."""
-        from tangle_drake.scene import make_scene
+        from tangle_drake.station.scene import make_scene
         from tangle_drake.teach.pictures import write_pictures
 
         s = self.settings

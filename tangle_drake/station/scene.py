@@ -13,13 +13,13 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context, Diagram
 
-from tangle_drake.bin_model import inner_corners
-from tangle_drake.camera import CameraModel, save_camera_json
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.graspability import bin_roi
-from tangle_drake.pile import PileReport, PileSettler
+from tangle_drake.perception.camera import CameraModel, save_camera_json
 from tangle_drake.scenario import Scenario
 from tangle_drake.station import SimulatedStation, build_station, camera_model
+from tangle_drake.station.bin_model import inner_corners
+from tangle_drake.station.pile import PileReport, PileSettler
 
 
 @dataclass

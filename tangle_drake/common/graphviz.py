@@ -6,7 +6,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 
 
 def graphviz_installed() -> bool:

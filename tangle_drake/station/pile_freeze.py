@@ -26,8 +26,8 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import Body
 from pydrake.systems.framework import Context
 
-from tangle_drake.bin_model import BIN_MODEL, inside_bin
 from tangle_drake.scenario import BinConfig
+from tangle_drake.station.bin_model import BIN_MODEL, inside_bin
 
 FREEZE_BEYOND_RADII = 2.0
 """Parts whose centre lies farther than this many bounding radii (horizontally) from the

@@ -12,9 +12,10 @@ from pathlib import Path
 
 from pydrake.multibody.parsing import PackageMap, Parser
 
-from tangle_drake.errors import TangleDrakeError
+from tangle_drake.common.errors import TangleDrakeError
 
-_PACKAGE_DIR = Path(__file__).resolve().parent
+_PACKAGE_DIR = Path(__file__).resolve().parent.parent
+"""The ``tangle_drake`` package."""
 
 
 def _shipped_dir(name: str, marker: str) -> Path:

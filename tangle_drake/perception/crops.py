@@ -22,9 +22,9 @@ from typing import Any
 import cv2
 import numpy as np
 
-from tangle_drake.camera import CameraIntrinsics
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.common.errors import TangleDrakeError
+from tangle_drake.perception.camera import CameraIntrinsics
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 
 
 @dataclass(frozen=True)

@@ -27,12 +27,12 @@ from pydrake.multibody.tree import Body
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context
 
-from tangle_drake.bin_model import inside_bin
-from tangle_drake.errors import TangleDrakeError
-from tangle_drake.gripper import DEFAULT_GRIPPER, GripperSpec
+from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.parts import load_part
+from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER, GripperSpec
 from tangle_drake.scenario import BinConfig, PileConfig, Scenario
 from tangle_drake.station import SimulatedStation
+from tangle_drake.station.bin_model import inside_bin
 
 _CHECK_PERIOD = 0.05  # s of simulated time between rest checks
 _REST_CHECKS = 2  # consecutive checks at rest before the pile counts as settled

@@ -13,7 +13,8 @@ from pathlib import Path
 
 from tangle_drake import __version__
 
-SOURCE = Path(__file__).resolve().parent
+SOURCE = Path(__file__).resolve().parent.parent
+"""The ``tangle_drake`` package."""
 
 
 def code_commit(source: Path = SOURCE) -> str:
@@ -23,7 +24,7 @@ def code_commit(source: Path = SOURCE) -> str:
         return subprocess.run(["git", "-C", str(source), *args], capture_output=True,
                               text=True, timeout=10, check=True).stdout.strip()
     try:
-        git("ls-files", "--error-unmatch", "provenance.py")  # not a wheel inside a checkout
+        git("ls-files", "--error-unmatch", "common/provenance.py")  # not a wheel inside a checkout
         commit = git("rev-parse", "--short=7", "HEAD")
         changed = git("status", "--porcelain", "--untracked-files=no", "--", ".")
     except (OSError, subprocess.SubprocessError):

@@ -15,7 +15,7 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
 
-from tangle_drake.paths import make_parser
+from tangle_drake.common.paths import make_parser
 from tangle_drake.robot_model import JOINTS, init_rtm
 
 NEXTAGE_JOINTS: tuple[str, ...] = tuple(j.name for j in JOINTS)

@@ -88,7 +88,7 @@ def load_camera_json(path) -> CameraModel:
     import json
     from pathlib import Path
 
-    from tangle_drake.errors import TangleDrakeError
+    from tangle_drake.common.errors import TangleDrakeError
 
     try:
         data = json.loads(Path(path).read_text())

@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from tangle_drake.progress import LINE_INTERVAL_S, Progress
+from tangle_drake.common.progress import LINE_INTERVAL_S, Progress
 
 LIFT_SHARES = (("tangled", "tangled"),)
 """The task counts an auto-lift collection's progress shows as shares of the samples."""
 
 
 class CollectProgress:
-    """:class:`~tangle_drake.progress.Progress` over the sample target, updated once per
+    """:class:`~tangle_drake.common.progress.Progress` over the sample target, updated once per
     finished task (a bar on a terminal, a line a minute in a log). The command prints a
     summary either way."""
 
