@@ -15,18 +15,24 @@ A ``fast`` single pick (the physical-pick data's) takes two shortcuts. It ends a
 fingers closed on nothing at the close, judged empty as the top of the lift would judge it
 (fingers closed past the empty width are empty whatever the lift does:
 :func:`~tangle_drake.pick.outcome.classify_lift`), instead of lifting the empty gripper out:
-the same outcome, without the lift's simulated seconds. And from the descent on it keeps the
-parts the grasp cannot reach frozen (:mod:`tangle_drake.station.pile_freeze`, the auto-lift
-labeller's rule measured from the grasp: centres farther than ``FREEZE_BEYOND_RADII + 1``
-bounding radii, since the target's centre lies within one radius of its grasp). Keeping the
-whole pile locked through the descent until the fingers touch it was tried and dropped: a
-pile frozen for that second instead of creeping is another pile, and it changed outcomes where
-moving the grasp a tenth of a millimetre did not (``docs/data-and-training.md``, Measured).
-``tools/fast_pick_agreement.py`` checks the fast pick against the full one.
+the same outcome, without the lift's simulated seconds. And where the scenario freezes
+nothing, it freezes the parts out of the grasp's reach from the descent on
+(:data:`PICK_DATA_FREEZE_RADII`). Keeping the whole pile locked through the descent until the
+fingers touch it was tried and dropped: a pile frozen for that second instead of creeping is
+another pile, and it changed outcomes where moving the grasp a tenth of a millimetre did not
+(``docs/data-and-training.md``, Measured).
+
+The scenario's ``simulation`` settings speed every caller up alike: the pick diagram's plant
+steps at ``pick_time_step`` (the pile is settled at the plant's own step), and with
+``freeze_beyond_radii`` each grasp freezes the parts out of its reach
+(:mod:`tangle_drake.station.pile_freeze`) from its descent until its lift is judged; they wake
+before anything else moves. ``tools/physics_agreement.py`` checks settings against the shipped
+ones, ``tools/fast_pick_agreement.py`` the fast pick against the full one.
 """
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
@@ -66,6 +72,13 @@ _POLL = 0.05
 """Simulated seconds between checks whether the pick is over, s."""
 _UNTOUCHED = (Mode.SETTLE, Mode.PERCEIVE, Mode.APPROACH)
 """Modes in which the robot does not reach into the bin: the settled pile stays locked."""
+_GRASPING = (Mode.DESCEND, Mode.CLOSE, Mode.LIFT, Mode.CHECK, Mode.WEIGH)
+"""Modes of a grasp in which the parts out of its reach may stay frozen: from the descent
+until the lift is judged (the first weighing; a shake, a put-back or a stir wakes them)."""
+PICK_DATA_FREEZE_RADII = FREEZE_BEYOND_RADII + 1
+"""A physical-pick sample's freeze, in bounding radii from the grasp, where the scenario sets
+none: the auto-lift labeller's rule measured from the target's centre, which lies within one
+radius of the grasp."""
 
 
 @dataclass(frozen=True)
@@ -94,7 +107,7 @@ class Episode:
                  fixed: MethodRun | None = None, return_home: bool = True,
                  lock_until_descent: bool = False, fast: bool = False,
                  sim_limit: float = SIM_TIME_PER_PICK, meshcat: Meshcat | None = None) -> None:
-        station = station or build_station(scenario, meshcat)
+        station = station or build_station(picking(scenario), meshcat)
         pick = build_pick_diagram(
             scenario, motion_for(scenario, return_home=return_home),
             selection_wiring(methods, part, scenario, fixed), station=station,
@@ -119,10 +132,13 @@ class Episode:
         self._contacts = ContactScaler(station.plant, station.scene_graph)
         self._bin = scenario.bin
         self._freeze = PileFreeze(station.plant, station.scene_graph, station.pile_bodies)
-        self._reach = (FREEZE_BEYOND_RADII + 1) * max(
+        radii = scenario.simulation.freeze_beyond_radii or (PICK_DATA_FREEZE_RADII if fast
+                                                            else None)
+        self._reach = None if radii is None else radii * max(
             load_part(entry.part, mesh_scale=entry.mesh_scale).bounding_radius
             for entry in scenario.pile.parts)
-        """Parts whose centre lies farther than this from the grasp stay frozen (``fast``), m."""
+        """Parts whose centre lies farther than this from a grasp are frozen while it is made
+        (``None``: none), m."""
 
     @classmethod
     def on_hardware(cls, scenario: Scenario, method: Method, settings: PickSettings,
@@ -210,7 +226,7 @@ class Episode:
                 for body in locked:
                     body.Unlock(station.mutable_plant_context(episode.context))
                 locked = []
-                if self.fast:
+                if self._reach is not None:
                     self._freeze_out_of_reach()
             return self.update_period if locked else _POLL
 
@@ -240,11 +256,34 @@ class Episode:
 
         self.episode.start(state, select)
 
-    def run(self, time_limit: float, **options) -> PickRun:
+    def run(self, time_limit: float, step: Callable[[Mode], float] | None = None,
+            **options) -> PickRun:
         """Run the diagram from where it is (after :meth:`start` in simulation) until its
         planner is done, the safety stops it or ``time_limit`` seconds have passed
-        (``options``: as :func:`~.run.run_picks` takes them)."""
-        return run_picks(self.clock, self.pick_diagram, time_limit, **options)
+        (``step`` and ``options``: as :func:`~.run.run_picks` takes them). With the
+        scenario's ``simulation.freeze_beyond_radii``, each grasp freezes the parts out of its
+        reach from its descent until its lift is judged."""
+        if getattr(self, "_reach", None) is None:
+            return run_picks(self.clock, self.pick_diagram, time_limit, step=step, **options)
+        frozen_for: list[int] = []  # the grasp (its record's index) the freeze was made for
+
+        def freezing(mode: Mode) -> float:
+            context = self.episode.context
+            if mode not in _GRASPING:
+                self._freeze.thaw(context)
+            elif mode is Mode.DESCEND and not self._freeze.frozen:
+                index = self.pick_diagram.diagram.GetOutputPort("current_pick").Eval(
+                    context).index
+                if index not in frozen_for:
+                    frozen_for.append(index)
+                    self._freeze_out_of_reach()
+            return _POLL if step is None else step(mode)
+
+        try:
+            return run_picks(self.clock, self.pick_diagram, time_limit, step=freezing,
+                             **options)
+        finally:
+            self._freeze.thaw(self.episode.context)
 
     def _freeze_out_of_reach(self) -> None:
         """Freeze the parts too far from the grasp being made to take part in its lift."""
@@ -273,3 +312,14 @@ class Episode:
     @staticmethod
     def _image(depth: list) -> np.ndarray:
         return np.asarray(depth[0].data)[:, :, 0].copy()
+
+
+def picking(scenario: Scenario) -> Scenario:
+    """``scenario`` as the pick diagram's station simulates it: at its
+    ``simulation.pick_time_step`` (the pile is settled at ``plant_config.time_step``)."""
+    time_step = scenario.simulation.pick_time_step
+    if time_step is None:
+        return scenario
+    plant_config = copy.copy(scenario.plant_config)
+    plant_config.time_step = time_step
+    return replace(scenario, plant_config=plant_config)

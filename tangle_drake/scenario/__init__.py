@@ -115,6 +115,35 @@ class PileConfig:
         return sum(entry.count for entry in self.parts)
 
 
+PICK_TIME_STEP_MAX = 0.003
+"""The largest time step a pick may run at, s: at 3 ms picks agree with the 2 ms ones as often
+as 2 ms picks agree with themselves; at 4 ms several parts come up as one or none more often
+(``docs/results/physics``)."""
+
+
+@dataclass
+class SimulationConfig:
+    """What the simulated pick may skip without changing what comes up (simulation only: the
+    hardware station ignores it). The pile is always dropped and settled at
+    ``plant_config.time_step``."""
+
+    pick_time_step: float | None = None
+    """The plant's time step while picking, s; ``None``: ``plant_config.time_step``."""
+    freeze_beyond_radii: float | None = None
+    """From each grasp's descent until its lift is judged, the parts whose centres lie farther
+    (horizontally) than this many of the pile's largest bounding radius from the grasp are
+    frozen: locked, their contacts with each other and the bin out of the queries; they wake
+    before anything else moves (transfer, shake, put-back, stir, the next look). ``None``:
+    nothing frozen (a physical-pick sample keeps its own 3)."""
+
+    def validate(self, where: str) -> None:
+        _require(self.pick_time_step is None or 0 < self.pick_time_step <= PICK_TIME_STEP_MAX,
+                 f"{where}.pick_time_step", f"must be in (0, {PICK_TIME_STEP_MAX}] s")
+        _require(self.freeze_beyond_radii is None or self.freeze_beyond_radii >= 1,
+                 f"{where}.freeze_beyond_radii",
+                 "must be at least 1: the grasped part reaches one radius from the grasp")
+
+
 @dataclass
 class Scenario:
     """One station: plant settings, models and their drivers, bin, pile, top camera, view
@@ -144,6 +173,7 @@ class Scenario:
     """Seeds the run's draws other than the pile's (``pile.seed``): the ``random`` rule's
     choices. The same scenario gives the same run."""
     pick: PickConfig = field(default_factory=PickConfig)
+    simulation: SimulationConfig = field(default_factory=SimulationConfig)
     camera: CameraConfig = field(default_factory=_default_camera)
     camera_height: float | None = 0.5
     """If set, the camera looks straight down from this height above the bin's floor centre
@@ -172,6 +202,7 @@ class Scenario:
                      "must stand beside the bin, not over it")
         self.pile.validate("pile")
         self.pick.validate("pick")
+        self.simulation.validate("simulation")
         _require(0 <= self.random_seed < SEED_LIMIT, "random_seed",
                  "must be a non-negative 63-bit integer")
         _require(self.camera.depth, "camera.depth", "must be true: graspability needs depth")
