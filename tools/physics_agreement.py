@@ -5,14 +5,17 @@ graspability's first ``--top-k`` candidates, picks three times from the same set
 under the model's physics: with the scenario as shipped, the same with the grasp moved
 0.1 mm (the simulator's own re-run agreement: contact is chaotic, a pick's outcome is a draw),
 and with the scenario under ``--new`` overlays (e.g. ``simulation: {pick_time_step: 0.003,
-freeze_beyond_radii: 2}``). Prints, against the shipped pick, each one's outcome agreement with
-its 95 % interval; McNemar's test of a one-sided shift of the new settings on several-vs-not
-and none-vs-not (the tangled label is several); the parts that left the bin; and each one's
-CPU seconds per pick. One JSON line per pile in ``--out`` after a first line naming the
-settings: run the same command again to resume; other settings are refused.
+freeze_beyond_radii: 2}``), with ``--fast`` as the physical-pick data's fast pick
+(:meth:`~tangle_drake.episode.episode.Episode.single_pick`). Prints, against the shipped
+pick, each one's outcome agreement with its 95 % interval; McNemar's test of a one-sided
+shift of the new settings on several-vs-not and none-vs-not (the tangled label is several);
+the parts that left the bin; and each one's CPU seconds per pick. One JSON line per pile in
+``--out`` after a first line naming the settings: run the same command again to resume;
+other settings are refused.
 
     python tools/physics_agreement.py --part e_shape --piles 40 \\
         --new "simulation: {pick_time_step: 0.003, freeze_beyond_radii: 2}" --out FILE
+    python tools/physics_agreement.py --part u_hook --piles 8 --fast --out FILE
 """
 
 from __future__ import annotations
@@ -79,7 +82,8 @@ def run_pile(rigs: dict[str, Episode], settings: PickDataSettings, task: int) ->
 def report(identity: dict, piles: list[dict]) -> None:
     rows = [r for pile in piles for r in pile["ranks"]]
     n = len(rows)
-    print(f"{identity['part']}: {len(piles)} piles, {n} paired picks; new: {identity['new']}")
+    print(f"{identity['part']}: {len(piles)} piles, {n} paired picks; new: {identity['new']}"
+          + (", the fast pick" if identity["fast"] else ""))
     for kind in ("rerun", "new"):
         agree = sum(r[kind] == r["shipped"] for r in rows)
         low, high = wilson(agree, n)
@@ -111,10 +115,13 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0, help="collection seed of the piles")
     parser.add_argument("--new", action="append", default=[], metavar="YAML",
                         help="an overlay of the new settings (repeatable)")
+    parser.add_argument("--fast", action="store_true",
+                        help="the new side picks as collect --label pick does")
     parser.add_argument("--out", type=Path, required=True,
                         help="JSON lines: the settings, then one line per pile")
     args = parser.parse_args()
-    identity = {"part": args.part, "top_k": args.top_k, "seed": args.seed, "new": args.new}
+    identity = {"part": args.part, "top_k": args.top_k, "seed": args.seed, "new": args.new,
+                "fast": args.fast}
     try:
         settings = PickDataSettings(args.part, top_k=args.top_k, seed=args.seed, physics=None)
         shipped = pick_data_scenario((diagrams_dir() / PICK_SCENARIO).read_text(), settings)
@@ -122,7 +129,7 @@ def main() -> int:
         floating = scenario_mode(shipped, "the scenario") == "floating"
         methods = [Method("graspability", "graspability")]
         rigs = {"shipped": Episode.single_pick(shipped, methods, args.part, floating),
-                "new": Episode.single_pick(new, methods, args.part, floating)}
+                "new": Episode.single_pick(new, methods, args.part, floating, fast=args.fast)}
         lines = args.out.read_text().splitlines() if args.out.exists() else []
         if lines and json.loads(lines[0]) != identity:
             raise TangleDrakeError(f"{args.out} holds a check of other settings: "

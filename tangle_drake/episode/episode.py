@@ -27,7 +27,7 @@ steps at ``pick_time_step`` (the pile is settled at the plant's own step), and w
 ``freeze_beyond_radii`` each grasp freezes the parts out of its reach
 (:mod:`tangle_drake.station.pile_freeze`) from its descent until its lift is judged; they wake
 before anything else moves. ``tools/physics_agreement.py`` checks settings against the shipped
-ones, ``tools/fast_pick_agreement.py`` the fast pick against the full one.
+ones, and (``--fast``) the fast pick against the full one.
 """
 
 from __future__ import annotations
