@@ -4,7 +4,7 @@ grasp cannot reach, for every caller of the episode (a single pick and a whole r
 import pytest
 
 from tangle_drake.common.errors import TangleDrakeError
-from tangle_drake.episode.episode import Episode
+from tangle_drake.episode.episode import Episode, freeze_change
 from tangle_drake.pick.planner import Mode
 from tangle_drake.scenario.files import scenario_source
 from tangle_drake.selection.methods import Method, MethodRun
@@ -31,21 +31,40 @@ def test_the_pick_runs_at_its_own_step_and_the_pile_settles_at_the_plants():
     assert episode.settler.station.plant.time_step() == scenario.plant_config.time_step == 0.002
 
 
-def test_a_run_freezes_far_parts_from_each_descent_until_the_lift_is_judged():
-    """A clearing's grasps: parts out of reach are frozen while the gripper is in the pile, and
-    awake whenever anything else moves (the transfer, the release, the next look)."""
+def test_a_run_keeps_what_no_grasp_reaches_frozen_and_wakes_it_after():
+    """A clearing's grasps: the settled pile is frozen until the first descent, then the parts
+    out of each grasp's reach, also while the robot is away (the transfer, the next look);
+    nothing is left frozen after the run."""
     scenario = scenario_source("floating_gripper.yaml", [SMALL, FAST]).load()
     episode = Episode.clearing(scenario, METHODS, "u_hook", open_loop=True)
-    frozen_in: dict[Mode, set[int]] = {}
+    frozen_in: dict[Mode, list[int]] = {}
 
     def watch(mode: Mode) -> float:
-        frozen_in.setdefault(mode, set()).add(len(episode._freeze.frozen))
+        frozen_in.setdefault(mode, []).append(len(episode._freeze.frozen))
         return 0.05
 
-    episode.start(episode.settle(scenario.pile.seed).state, MethodRun("graspability", 0))
-    run = episode.run(40.0, step=watch, on_pick=lambda _: None)
-    assert run.records, "no grasp was made"
-    assert max(frozen_in[Mode.CHECK]) > 0  # far parts frozen while the lift is judged
-    assert max(frozen_in.get(Mode.TRANSFER, {0}) | frozen_in[Mode.SETTLE]
-               | frozen_in[Mode.PERCEIVE]) == 0
-    assert not episode._freeze.frozen  # awake after the run
+    pile = episode.settle(scenario.pile.seed)
+    episode.start(pile.state, MethodRun("graspability", 0))
+    run = episode.run(25.0, step=watch)
+    assert len(run.records) >= 2, "fewer than two grasps"
+    in_bin = pile.report.num_in_bin
+    assert frozen_in[Mode.SETTLE][0] == in_bin  # before the first look: all of the pile
+    for mode in (Mode.CHECK, Mode.TRANSFER, Mode.HOME):
+        assert 0 < min(frozen_in[mode]) < in_bin  # the parts out of the grasp's reach
+    assert not episode._freeze.frozen
+
+
+@pytest.mark.parametrize(("mode", "grasp", "frozen_for", "frozen", "change"), [
+    (Mode.PERCEIVE, None, set(), False, "pile"),  # the settled pile, before any grasp
+    (Mode.APPROACH, 1, set(), True, None),
+    (Mode.DESCEND, 1, set(), True, "grasp"),  # wake, freeze what this grasp cannot reach
+    (Mode.DESCEND, 1, {1}, True, None),  # once per grasp
+    (Mode.TRANSFER, 1, {1}, True, None),  # the robot is away: it stays frozen
+    (Mode.SHAKE, 1, {1}, True, "wake"),  # a shake, a put-back or a stir wakes the pile
+    (Mode.PUT_BACK, 1, {1}, True, "wake"),
+    (Mode.STIR, None, {1}, True, "wake"),
+    (Mode.PERCEIVE, None, {1}, False, None),  # woken, it stays awake until the next descent
+    (Mode.DESCEND, 2, {1}, False, "grasp"),
+])
+def test_what_wakes_and_what_freezes_the_pile(mode, grasp, frozen_for, frozen, change):
+    assert freeze_change(mode, grasp, frozen_for, frozen) == change

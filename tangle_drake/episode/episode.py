@@ -25,9 +25,10 @@ another pile, and it changed outcomes where moving the grasp a tenth of a millim
 The scenario's ``simulation`` settings speed every caller up alike: the pick diagram's plant
 steps at ``pick_time_step`` (the pile is settled at the plant's own step), and with
 ``freeze_beyond_radii`` each grasp freezes the parts out of its reach
-(:mod:`tangle_drake.station.pile_freeze`) from its descent until its lift is judged; they wake
-before anything else moves. ``tools/physics_agreement.py`` checks settings against the shipped
-ones, and (``--fast``) the fast pick against the full one.
+(:mod:`tangle_drake.station.pile_freeze`) from its descent on (a run: until the next grasp's
+descent, or a shake, a put-back or a stir, which wake them; :func:`freeze_change`).
+``tools/physics_agreement.py`` checks settings against the shipped ones, and (``--fast``) the
+fast pick against the full one.
 """
 
 from __future__ import annotations
@@ -72,9 +73,9 @@ _POLL = 0.05
 """Simulated seconds between checks whether the pick is over, s."""
 _UNTOUCHED = (Mode.SETTLE, Mode.PERCEIVE, Mode.APPROACH)
 """Modes in which the robot does not reach into the bin: the settled pile stays locked."""
-_GRASPING = (Mode.DESCEND, Mode.CLOSE, Mode.LIFT, Mode.CHECK, Mode.WEIGH)
-"""Modes of a grasp in which the parts out of its reach may stay frozen: from the descent
-until the lift is judged (the first weighing; a shake, a put-back or a stir wakes them)."""
+_WAKING = (Mode.SHAKE, Mode.PUT_BACK, Mode.STIR)
+"""Modes that move loads or the gripper through the pile beyond a grasp's reach: they wake
+every frozen part, and the pile stays awake until the next grasp's descent."""
 PICK_DATA_FREEZE_RADII = FREEZE_BEYOND_RADII + 1
 """A physical-pick sample's freeze, in bounding radii from the grasp, where the scenario sets
 none: the auto-lift labeller's rule measured from the target's centre, which lies within one
@@ -261,22 +262,27 @@ class Episode:
         """Run the diagram from where it is (after :meth:`start` in simulation) until its
         planner is done, the safety stops it or ``time_limit`` seconds have passed
         (``step`` and ``options``: as :func:`~.run.run_picks` takes them). With the
-        scenario's ``simulation.freeze_beyond_radii``, each grasp freezes the parts out of its
-        reach from its descent until its lift is judged."""
+        scenario's ``simulation.freeze_beyond_radii``, each grasp's descent freezes the parts
+        out of its reach (those frozen for the grasp before wake first), and they stay frozen
+        while the robot is away from the pile, until a shake, a put-back or a stir; before
+        the first grasp the whole settled pile is (:func:`freeze_change`)."""
         if getattr(self, "_reach", None) is None:
             return run_picks(self.clock, self.pick_diagram, time_limit, step=step, **options)
-        frozen_for: list[int] = []  # the grasp (its record's index) the freeze was made for
+        frozen_for: set[int] = set()  # the grasps (their records' indices) frozen for
 
         def freezing(mode: Mode) -> float:
             context = self.episode.context
-            if mode not in _GRASPING:
+            current = self.pick_diagram.diagram.GetOutputPort("current_pick").Eval(context)
+            change = freeze_change(mode, None if current is None else current.index,
+                                   frozen_for, bool(self._freeze.frozen))
+            if change is not None:
                 self._freeze.thaw(context)
-            elif mode is Mode.DESCEND and not self._freeze.frozen:
-                index = self.pick_diagram.diagram.GetOutputPort("current_pick").Eval(
-                    context).index
-                if index not in frozen_for:
-                    frozen_for.append(index)
-                    self._freeze_out_of_reach()
+            if change == "grasp":
+                frozen_for.add(current.index)
+                self._freeze_out_of_reach()
+            elif change == "pile":
+                self._freeze.freeze(context, parts_beyond(self._freeze.centres(context),
+                                                          self._bin, [0.0, 0.0], -1.0))
             return _POLL if step is None else step(mode)
 
         try:
@@ -323,3 +329,19 @@ def picking(scenario: Scenario) -> Scenario:
     plant_config = copy.copy(scenario.plant_config)
     plant_config.time_step = time_step
     return replace(scenario, plant_config=plant_config)
+
+
+def freeze_change(mode: Mode, grasp: int | None, frozen_for: set[int],
+                  frozen: bool) -> str | None:
+    """What a run's freeze does as the planner is seen in ``mode`` with ``grasp`` (its
+    record's index) in progress: ``"pile"``, freeze every part in the bin (before the first
+    grasp: the settled pile is untouched until a descent); ``"grasp"``, wake the parts and
+    freeze those out of this grasp's reach (at its descent, once); ``"wake"``, wake them (a
+    shake, a put-back or a stir moves things through the pile); ``None``, leave it."""
+    if mode in _WAKING:
+        return "wake" if frozen else None
+    if mode is Mode.DESCEND and grasp is not None and grasp not in frozen_for:
+        return "grasp"
+    if not frozen_for and not frozen and mode in _UNTOUCHED:
+        return "pile"
+    return None

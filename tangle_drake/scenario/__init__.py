@@ -130,11 +130,12 @@ class SimulationConfig:
     pick_time_step: float | None = None
     """The plant's time step while picking, s; ``None``: ``plant_config.time_step``."""
     freeze_beyond_radii: float | None = None
-    """From each grasp's descent until its lift is judged, the parts whose centres lie farther
-    (horizontally) than this many of the pile's largest bounding radius from the grasp are
-    frozen: locked, their contacts with each other and the bin out of the queries; they wake
-    before anything else moves (transfer, shake, put-back, stir, the next look). ``None``:
-    nothing frozen (a physical-pick sample keeps its own 3)."""
+    """At each grasp's descent, the parts whose centres lie farther (horizontally) than this
+    many of the pile's largest bounding radius from the grasp are frozen: locked, their
+    contacts with each other and the bin out of the queries. A run keeps the settled pile
+    frozen until its first descent and what no grasp reaches frozen while the robot is away;
+    a shake, a put-back or a stir wakes them all. ``None``: nothing frozen (a physical-pick
+    sample keeps its own 3)."""
 
     def validate(self, where: str) -> None:
         _require(self.pick_time_step is None or 0 < self.pick_time_step <= PICK_TIME_STEP_MAX,
