@@ -11,7 +11,8 @@ pick, each one's outcome agreement with its 95 % interval; McNemar's test of a o
 shift of the new settings on several-vs-not and none-vs-not (the tangled label is several);
 the parts that left the bin; and each one's CPU seconds per pick. One JSON line per pile in
 ``--out`` after a first line naming the settings: run the same command again to resume;
-other settings are refused.
+other settings are refused. ``--baseline FILE``: an earlier check of the same part, piles and
+``--top-k`` gives the shipped and re-run picks of its piles, so only the new ones run.
 
     python tools/physics_agreement.py --part e_shape --piles 40 \\
         --new "simulation: {pick_time_step: 0.003, freeze_beyond_radii: 2}" --out FILE
@@ -54,15 +55,24 @@ def escaped(rig: Episode, pick: PhysicalPick) -> int:
     return max(0, out - (lifted or 0))
 
 
-def run_pile(rigs: dict[str, Episode], settings: PickDataSettings, task: int) -> dict:
-    """One pile's picks: per rank, each kind's outcome, escaped parts and CPU seconds."""
+def run_pile(rigs: dict[str, Episode], settings: PickDataSettings, task: int,
+             baseline: dict | None = None) -> dict:
+    """One pile's picks: per rank, each kind's outcome, escaped parts and CPU seconds (the
+    shipped and re-run ones from ``baseline``, the same pile's earlier check, if given)."""
     seed = pile_seed(settings.seed, task)
-    states = {kind: rig.settle(seed).state for kind, rig in
-              (("shipped", rigs["shipped"]), ("new", rigs["new"]))}
+    kinds = KINDS if baseline is None else ("new",)
+    states = {kind: rigs[kind].settle(seed).state for kind in ("shipped", "new")
+              if kind in kinds or (kind == "shipped" and "rerun" in kinds)}
+    earlier = {} if baseline is None else {row["rank"]: row for row in baseline["ranks"]}
     ranks = []
     for rank in range(settings.top_k):
         row: dict = {"rank": rank}
-        for kind in KINDS:
+        if baseline is not None:
+            if rank not in earlier:
+                break  # the shipped pick found no candidate here
+            row.update({key: value for key, value in earlier[rank].items()
+                        if not key.startswith("new")})
+        for kind in kinds:
             rig = rigs["new" if kind == "new" else "shipped"]
             run = MethodRun("graspability", 0, only=rank,
                             offset=RERUN_OFFSET if kind == "rerun" else None)
@@ -107,6 +117,20 @@ def report(identity: dict, piles: list[dict]) -> None:
           "(CPU)")
 
 
+def read_baseline(path: Path | None, identity: dict) -> dict[int, dict]:
+    """An earlier check's piles by task; refused unless of the same part, piles and top-k."""
+    if path is None:
+        return {}
+    try:
+        first, *piles = path.read_text().splitlines()
+    except (OSError, ValueError) as error:
+        raise TangleDrakeError(f"--baseline {path}: cannot read a check there") from error
+    same = ("part", "top_k", "seed")
+    if any(json.loads(first).get(key) != identity[key] for key in same):
+        raise TangleDrakeError(f"--baseline {path} checked other piles: {first}")
+    return {pile["task"]: pile for pile in map(json.loads, piles)}
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--part", default="u_hook")
@@ -117,6 +141,8 @@ def main() -> int:
                         help="an overlay of the new settings (repeatable)")
     parser.add_argument("--fast", action="store_true",
                         help="the new side picks as collect --label pick does")
+    parser.add_argument("--baseline", type=Path, default=None,
+                        help="an earlier check of the same piles: its shipped picks")
     parser.add_argument("--out", type=Path, required=True,
                         help="JSON lines: the settings, then one line per pile")
     args = parser.parse_args()
@@ -134,6 +160,7 @@ def main() -> int:
         if lines and json.loads(lines[0]) != identity:
             raise TangleDrakeError(f"{args.out} holds a check of other settings: "
                                    f"{lines[0]}; use another --out")
+        baseline = read_baseline(args.baseline, identity)
     except TangleDrakeError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
@@ -143,7 +170,7 @@ def main() -> int:
         if not lines:
             out.write(json.dumps(identity) + "\n")
         for task in range(len(done), args.piles):
-            done.append(run_pile(rigs, settings, task))
+            done.append(run_pile(rigs, settings, task, baseline.get(task)))
             out.write(json.dumps(done[-1]) + "\n")
             out.flush()
             print(f"pile {task + 1}/{args.piles}", file=sys.stderr, flush=True)
