@@ -10,7 +10,7 @@ from tangle_drake.scenario.files import scenario_source
 from tangle_drake.selection.methods import Method, MethodRun
 
 FAST = "simulation: {pick_time_step: 0.003, freeze_beyond_radii: 1.5}"
-SMALL = "pile: {parts: [{part: u_hook, count: 6}], seed: 4}"
+SMALL = "pile: {parts: [{part: u_hook, count: 12}], seed: 4}"
 METHODS = [Method("graspability", "graspability")]
 
 
@@ -33,14 +33,16 @@ def test_the_pick_runs_at_its_own_step_and_the_pile_settles_at_the_plants():
 
 def test_a_run_keeps_what_no_grasp_reaches_frozen_and_wakes_it_after():
     """A clearing's grasps: the settled pile is frozen until the first descent, then the parts
-    out of each grasp's reach, also while the robot is away (the transfer, the next look);
-    nothing is left frozen after the run."""
+    out of each grasp's reach, also while the robot is away (the transfer), and once it is
+    home, every part at rest (the next look); nothing is left frozen after the run."""
     scenario = scenario_source("floating_gripper.yaml", [SMALL, FAST]).load()
     episode = Episode.clearing(scenario, METHODS, "u_hook", open_loop=True)
     frozen_in: dict[Mode, list[int]] = {}
+    seen: list[tuple[Mode, int]] = []
 
     def watch(mode: Mode) -> float:
         frozen_in.setdefault(mode, []).append(len(episode._freeze.frozen))
+        seen.append((mode, len(episode._freeze.frozen)))
         return 0.05
 
     pile = episode.settle(scenario.pile.seed)
@@ -49,22 +51,27 @@ def test_a_run_keeps_what_no_grasp_reaches_frozen_and_wakes_it_after():
     assert len(run.records) >= 2, "fewer than two grasps"
     in_bin = pile.report.num_in_bin
     assert frozen_in[Mode.SETTLE][0] == in_bin  # before the first look: all of the pile
-    for mode in (Mode.CHECK, Mode.TRANSFER, Mode.HOME):
+    for mode in (Mode.CHECK, Mode.TRANSFER):
         assert 0 < min(frozen_in[mode]) < in_bin  # the parts out of the grasp's reach
+    modes = [mode for mode, _ in seen]
+    after_home = seen[modes.index(Mode.SETTLE, modes.index(Mode.HOME))][1]
+    assert after_home > frozen_in[Mode.TRANSFER][0]  # home: the parts at rest too
     assert not episode._freeze.frozen
 
 
-@pytest.mark.parametrize(("mode", "grasp", "frozen_for", "frozen", "change"), [
-    (Mode.PERCEIVE, None, set(), False, "pile"),  # the settled pile, before any grasp
-    (Mode.APPROACH, 1, set(), True, None),
-    (Mode.DESCEND, 1, set(), True, "grasp"),  # wake, freeze what this grasp cannot reach
-    (Mode.DESCEND, 1, {1}, True, None),  # once per grasp
-    (Mode.TRANSFER, 1, {1}, True, None),  # the robot is away: it stays frozen
-    (Mode.SHAKE, 1, {1}, True, "wake"),  # a shake, a put-back or a stir wakes the pile
-    (Mode.PUT_BACK, 1, {1}, True, "wake"),
-    (Mode.STIR, None, {1}, True, "wake"),
-    (Mode.PERCEIVE, None, {1}, False, None),  # woken, it stays awake until the next descent
-    (Mode.DESCEND, 2, {1}, False, "grasp"),
+@pytest.mark.parametrize(("mode", "grasp", "frozen_for", "frozen", "rested", "change"), [
+    (Mode.PERCEIVE, None, set(), False, False, "pile"),  # the settled pile, before any grasp
+    (Mode.APPROACH, 1, set(), True, True, None),
+    (Mode.DESCEND, 1, set(), True, True, "grasp"),  # wake, freeze what it cannot reach
+    (Mode.DESCEND, 1, {1}, True, False, None),  # once per grasp
+    (Mode.TRANSFER, 1, {1}, True, False, None),  # the robot is away: it stays frozen
+    (Mode.HOME, None, {1}, True, False, "rest"),  # home: what has come to rest, too
+    (Mode.HOME, None, {1}, True, True, None),  # once per grasp
+    (Mode.SHAKE, 1, {1}, True, False, "wake"),  # a shake, a put-back or a stir wakes it
+    (Mode.PUT_BACK, 1, {1}, True, False, "wake"),
+    (Mode.STIR, None, {1}, True, True, "wake"),
+    (Mode.PERCEIVE, None, {1}, False, True, None),  # woken: awake until the next descent
+    (Mode.DESCEND, 2, {1}, False, True, "grasp"),
 ])
-def test_what_wakes_and_what_freezes_the_pile(mode, grasp, frozen_for, frozen, change):
-    assert freeze_change(mode, grasp, frozen_for, frozen) == change
+def test_what_wakes_and_what_freezes_the_pile(mode, grasp, frozen_for, frozen, rested, change):
+    assert freeze_change(mode, grasp, frozen_for, frozen, rested) == change

@@ -269,20 +269,24 @@ class Episode:
         if getattr(self, "_reach", None) is None:
             return run_picks(self.clock, self.pick_diagram, time_limit, step=step, **options)
         frozen_for: set[int] = set()  # the grasps (their records' indices) frozen for
+        rested: set[int] = set()  # the grasp counts after which the resting pile was frozen
 
         def freezing(mode: Mode) -> float:
             context = self.episode.context
             current = self.pick_diagram.diagram.GetOutputPort("current_pick").Eval(context)
             change = freeze_change(mode, None if current is None else current.index,
-                                   frozen_for, bool(self._freeze.frozen))
+                                   frozen_for, bool(self._freeze.frozen),
+                                   len(frozen_for) in rested)
             if change is not None:
                 self._freeze.thaw(context)
             if change == "grasp":
                 frozen_for.add(current.index)
                 self._freeze_out_of_reach()
-            elif change == "pile":
-                self._freeze.freeze(context, parts_beyond(self._freeze.centres(context),
-                                                          self._bin, [0.0, 0.0], -1.0))
+            elif change is not None and change != "wake":  # "pile", "rest"
+                resting = self._freeze.speeds(context) < self.scenario.pile.settle_speed
+                in_bin = parts_beyond(self._freeze.centres(context), self._bin, [0.0, 0.0], -1.0)
+                self._freeze.freeze(context, [n for n in in_bin if resting[n]])
+                rested.add(len(frozen_for))
             return _POLL if step is None else step(mode)
 
         try:
@@ -331,17 +335,21 @@ def picking(scenario: Scenario) -> Scenario:
     return replace(scenario, plant_config=plant_config)
 
 
-def freeze_change(mode: Mode, grasp: int | None, frozen_for: set[int],
-                  frozen: bool) -> str | None:
+def freeze_change(mode: Mode, grasp: int | None, frozen_for: set[int], frozen: bool,
+                  rested: bool) -> str | None:
     """What a run's freeze does as the planner is seen in ``mode`` with ``grasp`` (its
-    record's index) in progress: ``"pile"``, freeze every part in the bin (before the first
-    grasp: the settled pile is untouched until a descent); ``"grasp"``, wake the parts and
-    freeze those out of this grasp's reach (at its descent, once); ``"wake"``, wake them (a
-    shake, a put-back or a stir moves things through the pile); ``None``, leave it."""
+    record's index) in progress: ``"pile"``, freeze every resting part in the bin (before the
+    first grasp: the settled pile is untouched until a descent); ``"grasp"``, wake the parts
+    and freeze those out of this grasp's reach (at its descent, once); ``"rest"``, freeze
+    every part in the bin that has come to rest (once the robot has gone home after a grasp,
+    ``rested`` telling whether that was done since the last descent); ``"wake"``, wake them
+    (a shake, a put-back or a stir moves things through the pile); ``None``, leave it."""
     if mode in _WAKING:
         return "wake" if frozen else None
     if mode is Mode.DESCEND and grasp is not None and grasp not in frozen_for:
         return "grasp"
     if not frozen_for and not frozen and mode in _UNTOUCHED:
         return "pile"
+    if frozen_for and not rested and mode is Mode.HOME:
+        return "rest"
     return None

@@ -73,6 +73,12 @@ class PileFreeze:
         plant_context = self.plant.GetMyContextFromRoot(root_context)
         return np.array([b.EvalPoseInWorld(plant_context).translation() for b in self.bodies])
 
+    def speeds(self, root_context: Context) -> np.ndarray:
+        """Every pile part's translational speed, (N,) m/s."""
+        plant_context = self.plant.GetMyContextFromRoot(root_context)
+        return np.array([np.linalg.norm(b.EvalSpatialVelocityInWorld(plant_context)
+                                        .translational()) for b in self.bodies])
+
     def freeze(self, root_context: Context, parts: Sequence[int]) -> None:
         """Lock ``parts`` (pile indices) where they lie, at rest, and drop their contacts with
         each other and with the bin from the geometry queries."""
