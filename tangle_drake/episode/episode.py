@@ -263,9 +263,10 @@ class Episode:
         planner is done, the safety stops it or ``time_limit`` seconds have passed
         (``step`` and ``options``: as :func:`~.run.run_picks` takes them). With the
         scenario's ``simulation.freeze_beyond_radii``, each grasp's descent freezes the parts
-        out of its reach (those frozen for the grasp before wake first), and they stay frozen
-        while the robot is away from the pile, until a shake, a put-back or a stir; before
-        the first grasp the whole settled pile is (:func:`freeze_change`)."""
+        out of its reach (those frozen for the grasp before wake first); they stay frozen
+        while the robot is away from the pile, every part at rest joins them once it is home,
+        and a shake, a put-back or a stir wakes them; before the first grasp the whole settled
+        pile is frozen (:func:`freeze_change`)."""
         if getattr(self, "_reach", None) is None:
             return run_picks(self.clock, self.pick_diagram, time_limit, step=step, **options)
         frozen_for: set[int] = set()  # the grasps (their records' indices) frozen for

@@ -133,8 +133,9 @@ class SimulationConfig:
     """At each grasp's descent, the parts whose centres lie farther (horizontally) than this
     many of the pile's largest bounding radius from the grasp are frozen: locked, their
     contacts with each other and the bin out of the queries. A run keeps the settled pile
-    frozen until its first descent and what no grasp reaches frozen while the robot is away;
-    a shake, a put-back or a stir wakes them all. ``None``: nothing frozen (a physical-pick
+    frozen until its first descent and what no grasp reaches frozen while the robot is away,
+    and freezes every part at rest once it is home; a shake, a put-back or a stir wakes them
+    all. ``None``: nothing frozen (a physical-pick
     sample keeps its own 3)."""
 
     def validate(self, where: str) -> None:
