@@ -116,9 +116,9 @@ class PileConfig:
 
 
 PICK_TIME_STEP_MAX = 0.003
-"""The largest time step a pick may run at, s: at 3 ms picks agree with the 2 ms ones as often
-as 2 ms picks agree with themselves; at 4 ms several parts come up as one or none more often
-(``docs/results/physics``)."""
+"""The largest time step a pick may run at, s. Even 3 ms changes outcomes: E-shapes slip out of
+the pads where at 2 ms they come up (``docs/results/physics/step3ms_freeze2``); at 4 ms
+several parts come up as one or none more often. Faster, not the same picks."""
 
 
 @dataclass
