@@ -169,3 +169,22 @@ def test_a_tuning_its_system_refuses_is_refused_naming_the_field():
     scenario = scenario_source("pick_demo.yaml", ["pick: {payload: {min_confidence: 1.5}}"]).load()
     with pytest.raises(TangleDrakeError, match=r"scenario field 'pick\.payload': .*min_confidence"):
         payload_settings(scenario)
+
+
+@pytest.mark.parametrize(("tuning", "settings"), [
+    ("PlannerTuning", "tangle_drake.pick.modes:PickSettings"),
+    ("RecoveryTuning", "tangle_drake.pick.recovery:RecoverySettings"),
+    ("PayloadTuning", "tangle_drake.pick.payload:PayloadSettings"),
+    ("GraspabilityTuning", "tangle_drake.graspability.params:GraspabilityParams"),
+])
+def test_every_tuning_names_a_setting_of_its_system(tuning, settings):
+    """The scenario's sections list their systems' settings by name: a name the settings
+    class lacks would fail only when a scenario set it."""
+    import dataclasses
+    import importlib
+
+    from tangle_drake.scenario import pick
+
+    module, name = settings.split(":")
+    known = {f.name for f in dataclasses.fields(getattr(importlib.import_module(module), name))}
+    assert {f.name for f in dataclasses.fields(getattr(pick, tuning))} <= known

@@ -61,8 +61,8 @@ def run_pile(rigs: dict[str, Episode], settings: PickDataSettings, task: int,
     shipped and re-run ones from ``baseline``, the same pile's earlier check, if given)."""
     seed = pile_seed(settings.seed, task)
     kinds = KINDS if baseline is None else ("new",)
-    states = {kind: rigs[kind].settle(seed).state for kind in ("shipped", "new")
-              if kind in kinds or (kind == "shipped" and "rerun" in kinds)}
+    states = {rig: rigs[rig].settle(seed).state
+              for rig in (("shipped", "new") if baseline is None else ("new",))}
     earlier = {} if baseline is None else {row["rank"]: row for row in baseline["ranks"]}
     ranks = []
     for rank in range(settings.top_k):

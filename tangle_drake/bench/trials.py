@@ -177,9 +177,9 @@ def pick_row(method: str, record: PickRecord | None, extra: dict) -> dict:
         row.update(
             outcome=record.outcome.name, reason=record.reason, lifted=record.truth.lifted,
             width=record.width, rank=record.rank, p_model=record.p_model,
-            rejected=len(record.rejected), **{
-                name: getattr(record.timing, name)
-                for name in ("perception_s", "cnn_s", "planning_s", "execution_s")},
+            rejected=len(record.rejected), perception_s=record.timing.perception_s,
+            cnn_s=record.timing.cnn_s, planning_s=record.timing.planning_s,
+            execution_s=record.timing.execution_s,
             candidate=None if candidate is None else {
                 "u": float(candidate.u), "v": float(candidate.v),
                 "angle_deg": float(candidate.angle_deg), "score": float(candidate.score)})

@@ -62,6 +62,7 @@ from tangle_drake.planning.motions import motion_for
 from tangle_drake.scenario import Scenario
 from tangle_drake.selection.methods import Method, MethodRun, selection_wiring
 from tangle_drake.station import SimulatedStation, build_station, camera_model
+from tangle_drake.station.bin_model import inside_bin
 from tangle_drake.station.perturb import ContactScaler, PickPhysics
 from tangle_drake.station.pile import PileSettler, SettledPile
 from tangle_drake.station.pile_freeze import FREEZE_BEYOND_RADII, PileFreeze, parts_beyond
@@ -118,6 +119,9 @@ class Episode:
         self.robot: HardwareSim | None = None
         """With the hardware simulator in this process (:meth:`on_hardware`): the robot side."""
         self.methods = {m.name: m for m in methods}
+        self._reach: float | None = None
+        """Parts whose centre lies farther than this from a grasp are frozen while it is made
+        (``None``: none, and always on hardware), m."""
         if not isinstance(station, SimulatedStation):
             return  # on hardware: :meth:`on_hardware` sets the clock
         self.settler = PileSettler(build_station(scenario, meshcat), scenario)
@@ -135,11 +139,10 @@ class Episode:
         self._freeze = PileFreeze(station.plant, station.scene_graph, station.pile_bodies)
         radii = scenario.simulation.freeze_beyond_radii or (PICK_DATA_FREEZE_RADII if fast
                                                             else None)
-        self._reach = None if radii is None else radii * max(
-            load_part(entry.part, mesh_scale=entry.mesh_scale).bounding_radius
-            for entry in scenario.pile.parts)
-        """Parts whose centre lies farther than this from a grasp are frozen while it is made
-        (``None``: none), m."""
+        if radii is not None:
+            self._reach = radii * max(
+                load_part(entry.part, mesh_scale=entry.mesh_scale).bounding_radius
+                for entry in scenario.pile.parts)
 
     @classmethod
     def on_hardware(cls, scenario: Scenario, method: Method, settings: PickSettings,
@@ -267,7 +270,7 @@ class Episode:
         while the robot is away from the pile, every part at rest joins them once it is home,
         and a shake, a put-back or a stir wakes them; before the first grasp the whole settled
         pile is frozen (:func:`freeze_change`)."""
-        if getattr(self, "_reach", None) is None:
+        if self._reach is None:
             return run_picks(self.clock, self.pick_diagram, time_limit, step=step, **options)
         frozen_for: set[int] = set()  # the grasps (their records' indices) frozen for
         rested: set[int] = set()  # the grasp counts after which the resting pile was frozen
@@ -284,9 +287,9 @@ class Episode:
                 frozen_for.add(current.index)
                 self._freeze_out_of_reach()
             elif change is not None and change != "wake":  # "pile", "rest"
-                resting = self._freeze.speeds(context) < self.scenario.pile.settle_speed
-                in_bin = parts_beyond(self._freeze.centres(context), self._bin, [0.0, 0.0], -1.0)
-                self._freeze.freeze(context, [n for n in in_bin if resting[n]])
+                resting = (self._freeze.speeds(context) < self.scenario.pile.settle_speed) \
+                    & inside_bin(self._bin, self._freeze.centres(context))
+                self._freeze.freeze(context, np.flatnonzero(resting).tolist())
                 rested.add(len(frozen_for))
             return _POLL if step is None else step(mode)
 
