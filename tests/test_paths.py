@@ -1,9 +1,9 @@
 """The path helpers of ``tangle_drake.common.paths``: how results record the paths they were
 given."""
 
-import argparse
 from pathlib import Path
 
+from tangle_drake.cli import build_parser
 from tangle_drake.commands.bench import command_line
 from tangle_drake.common.paths import PLACEHOLDER, shown_path
 
@@ -30,14 +30,17 @@ def test_a_recorded_path_names_nothing_of_the_machine(tmp_path, monkeypatch):
 
 
 def test_the_benchmark_records_its_command_with_shown_paths(tmp_path, monkeypatch):
+    """As the command line gives them: through the real parser, a base scenario with an overlay
+    file and an overlay text (each a list, as ``nargs`` and ``append`` make them)."""
     monkeypatch.chdir(ROOT)
-    args = argparse.Namespace(
-        methods=["graspability", f"model:{tmp_path / 'a' / 'model.pt'}",
-                 f"success-cnn:{ROOT / 'tangle_drake' / 'trained' / 'u_hook.outcome.pt'}"],
-        parts=["u_hook", str(tmp_path / "hook.obj")], trials=2, mode=None, seed=0,
-        scenario=str(ROOT / "diagrams" / "dense_bin.yaml"), mesh_scale=1.0, clear=False,
-        open_loop=False, quick=False, gallery=False, perturb=False, out=tmp_path / "closed_s41")
+    args = build_parser().parse_args([
+        "bench", "--methods", "graspability", f"model:{tmp_path / 'a' / 'model.pt'}",
+        f"success-cnn:{ROOT / 'tangle_drake' / 'trained' / 'u_hook.outcome.pt'}",
+        "--parts", "u_hook", str(tmp_path / "hook.obj"), "--trials", "2", "--workers", "2",
+        "--scenario", str(ROOT / "diagrams" / "dense_bin.yaml"), str(tmp_path / "freeze.yaml"),
+        "--scenario-text", "pile: {seed: 3}", "--out", str(tmp_path / "closed_s41")])
     assert command_line(args) == (
         "tangle-drake bench --methods graspability model:DATA/model.pt "
         "success-cnn:tangle_drake/trained/u_hook.outcome.pt --parts u_hook DATA/hook.obj "
-        "--trials 2 --scenario diagrams/dense_bin.yaml --out DATA/closed_s41")
+        "--trials 2 --scenario diagrams/dense_bin.yaml DATA/freeze.yaml "
+        "--scenario-text 'pile: {seed: 3}' --out DATA/closed_s41")

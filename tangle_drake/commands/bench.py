@@ -83,11 +83,14 @@ def command_line(args: argparse.Namespace) -> str:
     if args.parts is not None:
         words += ["--parts", *map(shown_path, args.parts)]
     for option, default in (("trials", None), ("mode", None), ("seed", 0),
-                            ("scenario", None), ("mesh_scale", 1.0)):
+                            ("mesh_scale", 1.0)):
         value = getattr(args, option)
         if value != default:
-            value = shown_path(value) if option == "scenario" else value
             words += [f"--{option.replace('_', '-')}", str(value)]
+    if args.scenario:
+        words += ["--scenario", *map(shown_path, args.scenario)]
+    for text in args.scenario_text:
+        words += ["--scenario-text", text]
     words += ["--clear"] if args.clear else []
     words += ["--open-loop"] if args.open_loop else []
     words += ["--quick"] if args.quick else []
