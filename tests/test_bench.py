@@ -18,13 +18,14 @@ import torch
 from pydrake.math import RigidTransform
 
 from tangle_drake.bench.clear_report import figures
-from tangle_drake.bench.clearing import EscapeWatch
+from tangle_drake.bench.clearing import BinProgress, EscapeWatch, end_reason
 from tangle_drake.bench.gallery import GALLERY, INDEX, TILE_KEY, tile_path
 from tangle_drake.bench.report import terminal_summary
 from tangle_drake.bench.results import IDENTITY_FILE, RESULTS_FILE
 from tangle_drake.bench.runner import BenchOptions, plan, run_bench
 from tangle_drake.bench.trials import classify, method_seed, pile_seed
 from tangle_drake.cli import main
+from tangle_drake.episode.run import PickRun, RunEnd
 from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.common.failures import FailureKind
 from tangle_drake.common.paths import diagrams_dir, shown_path
@@ -444,12 +445,48 @@ def test_clearing_a_quick_bin_counts_what_landed_in_the_tray(tmp_path, capsys):
         (out / "clear_report.md").read_text().splitlines()[2]
     assert "exactly one part" in (out / "clear_report.md").read_text()
     assert "graspability: delivered" in capsys.readouterr().out
+    starts = [g["started_at"] for g in run["grasps"] if g["started_at"] is not None]
+    assert starts == sorted(starts) and len(starts) >= 1
+    if run["left_in_bin"]:  # why it stopped short is in the report
+        assert run["end_reason"] != "the bin is empty"
+        assert run["end_reason"] in (out / "clear_report.md").read_text()
+    else:
+        assert run["end_reason"] == "the bin is empty"
     # The same command again resumes: nothing to run.
     assert main(["bench", "--clear", "--quick", "--workers", "1", "--out", str(out)]) == 0
     assert len(trials_in(out)) == 1
     with pytest.raises(TangleDrakeError, match="other settings"):  # open loop is another run
         run_bench(BenchOptions(clear=True, open_loop=True, quick=True, workers=1, out=out,
                                show_progress=False))
+
+
+def test_a_clearing_says_why_it_ended():
+    gave_up = PickRecord(index=7, failure=FailureKind.GAVE_UP,
+                         reason="5 grasps in a row delivered nothing, 2 stirs since the last "
+                                "delivery")
+    done = PickRun([PickRecord(index=1, outcome=Outcome.ONE)], RunEnd.DONE, 80.0)
+    assert end_reason(done, 0, 600.0) == "the bin is empty"
+    assert end_reason(replace(done, records=[gave_up]), 3, 600.0) == \
+        "gave up: 5 grasps in a row delivered nothing, 2 stirs since the last delivery"
+    assert end_reason(replace(done, end=RunEnd.TIMEOUT), 3, 600.0) == \
+        "out of time: 600 simulated s allowed"
+    assert end_reason(replace(done, end=RunEnd.STOPPED, safety_message="wrist overload"), 3,
+                      600.0) == "safety stop: wrist overload"
+    assert "with 3 parts in the bin" in end_reason(done, 3, 600.0)
+
+
+def test_a_long_clearing_says_where_it_stands_within_its_bin():
+    lines: list[str] = []
+    progress = BinProgress("s_hook bin 2 (harmonic)", 40, 0.0, lines.append)
+    rows = [{"landed": 1, "compute_s": 2.0}, {"landed": 0, "compute_s": 2.0},
+            {"landed": 1, "compute_s": 2.0}]
+    progress.grasp(rows, 34.0, 37)  # 2 parts in 34 + 6 s: 180 parts per hour
+    (line,) = lines
+    assert line.startswith("  s_hook bin 2 (harmonic): 2 of 40 parts delivered, 37 in the bin, "
+                           "3 grasps, 180 parts per hour so far, about ")
+    assert line.endswith(" min left")
+    BinProgress("quiet", 40, None, lines.append).grasp(rows, 34.0, 37)
+    assert len(lines) == 1  # no interval: silent
 
 
 def test_the_escape_watch_names_the_mode_a_lost_part_left_the_bin_in():

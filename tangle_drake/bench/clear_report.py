@@ -7,8 +7,10 @@ several were held up through contacts at the weighing that decided it, or landed
 while a held part still rested on the pile (the wrist then reads light); grasps (not looks
 that found nothing to pick) per delivered part; shakes, put-backs and stirs of the bin; parts
 left in the bin and lost (in neither bin nor tray, by where they fell from and the planner's
-mode then); the share of the bin cleared; delivered parts per hour of simulated time plus
-computation. Rates come with 95 % bootstrap intervals over bins.
+mode then); parts delivered ÷ parts in the bins (``cleared`` in the summary: not the share of
+bins emptied); delivered parts per hour of simulated time plus computation; each clearing
+that left parts in its bin, and why it ended. Rates come with 95 % bootstrap intervals over
+bins.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ BOOTSTRAP_SAMPLES = 2000
 BOOTSTRAP_SEED = 0
 _FIELDS = ("part", "trial", "method", "index", "outcome", "failure", "lifted", "held",
            "resting", "held_decided", "weighed", "verdict", "recoveries", "disposition",
-           "landed", "execution_s", "compute_s")
+           "landed", "started_at", "execution_s", "compute_s")
 
 
 def _counts(runs: Sequence[dict]) -> dict:
@@ -152,7 +154,7 @@ def _row(name: str, f: dict) -> str:
             f"{f['put_backs']} | {f['stirs']} | {f['left_in_bin']} | {f['lost']} | {pph} |")
 
 
-_HEADER = ["| method | bins | delivered / parts (cleared) | deliveries | exactly one part "
+_HEADER = ["| method | bins | delivered ÷ parts in the bins | deliveries | exactly one part "
            "[95 % CI] | several | several read as one | weighed while resting | grasps per "
            "part | shakes | put-backs | stirs | left in bin | lost | parts per hour [95 % CI] |",
            "|---" * 15 + "|"]
@@ -165,6 +167,16 @@ def _lost_lines(by_method: dict, methods: Sequence[str]) -> list[str]:
              for m in methods if by_method[m]["lost_by_mode"]]
     return ["", "Lost parts, by where they were (bin, tray, gripper) and the planner's mode "
             "when they fell:", "", *lines] \
+        if lines else []
+
+
+def _unfinished_lines(trials: Sequence[dict]) -> list[str]:
+    """Each clearing that left parts in the bin, and why it ended (a run made before the
+    reason was recorded gives the run's end)."""
+    lines = [f"- {trial['part']} bin {trial['trial']}, {run['method']}: {run['left_in_bin']} "
+             f"left; {run.get('end_reason', run['end'])}"
+             for trial in trials for run in trial["runs"] if run["left_in_bin"]]
+    return ["", "Clearings that ended with parts in the bin, and why:", "", *lines] \
         if lines else []
 
 
@@ -182,6 +194,7 @@ def write_clear_report(directory: Path, trials: Sequence[dict], summary: dict,
              "## All parts", "", *_HEADER,
              *[_row(m, summary["overall"][m]) for m in methods]]
     lines += _lost_lines(summary["overall"], methods)
+    lines += _unfinished_lines(trials)
     for part in parts:
         lines += ["", f"## {part}", "", *_HEADER,
                   *[_row(m, summary["by_part"][part][m]) for m in methods]]

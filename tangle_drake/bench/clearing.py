@@ -4,25 +4,25 @@ A bin is (part, trial index), its pile seed the same as the pick benchmark's tri
 index, so every method clears the same piles. Each method runs closed loop (weigh, shake, put
 back; ``--open-loop``: the paper's one look, one grasp) from the full settled pile until the
 planner is done: the bin is empty, nothing can be picked, or ``max_attempts`` grasps in a row
-delivered nothing. Every grasp is recorded with what the simulation saw land in the tray (the
-tray's count before and after it, not the estimator's word), so deliveries of several parts,
-and several read as one, are counted by the truth.
+delivered nothing (each clearing records why it ended). Every grasp is recorded with what
+the simulation saw land in the tray (the tray's count before and after it, not the
+estimator's word), so deliveries of several parts, and several read as one, are counted by
+the truth.
 """
 
 from __future__ import annotations
 
 import hashlib
 import time
+from collections.abc import Callable
 
 import numpy as np
 from pydrake.systems.framework import Context
 
 from tangle_drake.bench.trials import BenchConfig, PartSpec, method_seed, part_scenario, pile_seed
 from tangle_drake.episode.episode import Episode
-from tangle_drake.episode.run import POLL
-from tangle_drake.pick.diagram import (
-    PickDiagram,
-)
+from tangle_drake.episode.run import POLL, PickRun, RunEnd
+from tangle_drake.pick.diagram import PickDiagram
 from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import PickRecord
 from tangle_drake.scenario import BinConfig
@@ -35,10 +35,12 @@ SIM_TIME_PER_PART = 40.0
 
 class ClearWorker:
     """Clears bins (``(part index, trial index)``) for a :class:`BenchConfig` with ``clear``
-    set; keeps each part's episode once built."""
+    set; keeps each part's episode once built. With ``progress_interval_s``, says where a bin
+    stands at most that often (wall time): a full bin takes the best part of an hour."""
 
-    def __init__(self, config: BenchConfig) -> None:
+    def __init__(self, config: BenchConfig, progress_interval_s: float | None = None) -> None:
         self.config = config
+        self.progress_interval_s = progress_interval_s
         self._rigs: dict[str, Episode] = {}
 
     def run_task(self, task: tuple[int, int]) -> dict:
@@ -52,7 +54,8 @@ class ClearWorker:
                 "in_bin": settled.report.num_in_bin,
                 "digest": hashlib.sha256(settled.state.tobytes()).hexdigest()[:16]}
         random_seed = method_seed(self.config.seed, spec.name, trial)
-        runs = [self._clear(rig, settled.state, MethodRun(name, random_seed), pile["in_bin"])
+        runs = [self._clear(rig, settled.state, MethodRun(name, random_seed), pile["in_bin"],
+                            f"{spec.name} bin {trial}")
                 for name in rig.methods]
         return {"part": spec.name, "trial": trial, "pile": pile, "runs": runs,
                 "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
@@ -64,21 +67,25 @@ class ClearWorker:
                 self.config.open_loop)
         return self._rigs[spec.name]
 
-    def _clear(self, rig: Episode, state, run: MethodRun, in_bin: int) -> dict:
+    def _clear(self, rig: Episode, state, run: MethodRun, in_bin: int, name: str) -> dict:
         start, cpu = time.perf_counter(), time.process_time()
         episode = rig.episode
         pick = episode.pick
         rows: list[dict] = []
         tray = [0]
+        watch = EscapeWatch(pick, rig.scenario.bin, episode.simulator.get_context(), rows)
+        progress = BinProgress(f"{name} ({run.name})", in_bin, self.progress_interval_s)
 
         def grasp(record: PickRecord) -> None:
             now = tray_count(pick, episode.simulator.get_context())
             rows.append(grasp_row(record, now - tray[0]))
             tray[0] = now
+            progress.grasp(rows, episode.simulator.get_context().get_time(),
+                           int(watch.in_bin.sum()))
 
-        watch = EscapeWatch(pick, rig.scenario.bin, episode.simulator.get_context(), rows)
         rig.start(state, run)
-        result = rig.run(SIM_TIME_PER_PART * max(in_bin, 1), on_pick=grasp, step=watch)
+        time_limit = SIM_TIME_PER_PART * max(in_bin, 1)
+        result = rig.run(time_limit, on_pick=grasp, step=watch)
         # Parts still falling into the tray after the last grasp was recorded come to rest.
         episode.simulator.AdvanceTo(episode.simulator.get_context().get_time() + 1.0)
         watch(Mode.DONE)  # the last look: where every part came to rest
@@ -87,11 +94,54 @@ class ClearWorker:
             rows[-1]["landed"] += final - tray[0]
         left = int(watch.in_bin.sum())
         lost = set(np.flatnonzero(~watch.in_bin & ~watch.in_tray).tolist())
-        return {"method": run.name, "end": result.end.value, "sim_s": round(result.time, 3),
+        return {"method": run.name, "end": result.end.value,
+                "end_reason": end_reason(result, left, time_limit),
+                "sim_s": round(result.time, 3),
                 "compute_s": sum(r["compute_s"] for r in rows), "grasps": rows,
                 "delivered": final, "left_in_bin": left, "lost": in_bin - left - final,
                 "escapes": [e for e in watch.escapes if e["part"] in lost],
                 "wall_s": time.perf_counter() - start, "cpu_s": time.process_time() - cpu}
+
+
+def end_reason(result: PickRun, left_in_bin: int, time_limit: float) -> str:
+    """Why a clearing ended, in words: the bin emptied, the time allowed ran out, a safety
+    stop, or the planner's reason for stopping with parts left (its last record's: grasps in
+    a row that delivered nothing and the stirs since the last delivery, or nothing left that
+    it could pick)."""
+    if result.end is RunEnd.TIMEOUT:
+        return f"out of time: {time_limit:.0f} simulated s allowed"
+    if result.end is RunEnd.STOPPED:
+        return f"safety stop: {result.safety_message}"
+    if left_in_bin == 0:
+        return "the bin is empty"
+    last = result.records[-1] if result.records else None
+    if last is None or last.failure is None:
+        return f"the planner stopped with {left_in_bin} parts in the bin"
+    return f"{last.failure.value}: {last.reason}" if last.reason else last.failure.value
+
+
+class BinProgress:
+    """Where one clearing stands, a line at most every ``interval_s`` of wall time (``None``:
+    silent): parts delivered and left, grasps, the rate so far (simulated time plus
+    computation, as the report counts it) and the wall time left at the pace so far."""
+
+    def __init__(self, name: str, parts: int, interval_s: float | None,
+                 say: Callable[[str], None] = lambda line: print(line, flush=True)) -> None:
+        self.name, self.parts, self.interval_s, self.say = name, parts, interval_s, say
+        self._start = self._last = time.perf_counter()
+
+    def grasp(self, rows: list[dict], sim_time: float, left_in_bin: int) -> None:
+        now = time.perf_counter()
+        if self.interval_s is None or now - self._last < self.interval_s:
+            return
+        self._last = now
+        delivered = sum(row["landed"] for row in rows)
+        hours = (sim_time + sum(row["compute_s"] for row in rows)) / 3600
+        rate = f", {delivered / hours:.0f} parts per hour so far" if hours > 0 else ""
+        left = f", about {(now - self._start) / delivered * left_in_bin / 60:.0f} min left" \
+            if delivered else ""
+        self.say(f"  {self.name}: {delivered} of {self.parts} parts delivered, {left_in_bin} "
+                 f"in the bin, {len(rows)} grasps{rate}{left}")
 
 
 class EscapeWatch:
@@ -153,6 +203,7 @@ def grasp_row(record: PickRecord, landed: int) -> dict:
             "verdict": None if record.verdict is None else record.verdict.name,
             "recoveries": [r.name for r in record.recoveries],
             "disposition": None if record.disposition is None else record.disposition.name,
-            "landed": landed, "execution_s": round(record.timing.execution_s, 3),
+            "landed": landed, "started_at": record.timing.started_at,
+            "execution_s": round(record.timing.execution_s, 3),
             "compute_s": record.timing.compute_s}
 

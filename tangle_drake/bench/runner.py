@@ -33,7 +33,7 @@ from tangle_drake.bench.trials import (
 )
 from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.common.paths import shown_path
-from tangle_drake.common.progress import Progress
+from tangle_drake.common.progress import LINE_INTERVAL_S, Progress
 from tangle_drake.common.provenance import made_by
 from tangle_drake.common.workers import start_workers
 from tangle_drake.parts import BUILTIN_PARTS, load_part
@@ -288,8 +288,9 @@ def _run_trials(config: BenchConfig, store: ResultStore, todo: list[tuple[int, i
     count = options.workers or (None if options.ray else os.cpu_count() or 1)
     if count is not None:
         count = min(count, len(todo))
-    backend = start_workers(ClearWorker if config.clear else TrialWorker, (config,), count,
-                            options.ray)
+    interval = None if options.show_progress is False else LINE_INTERVAL_S
+    backend = start_workers(ClearWorker, (config, interval), count, options.ray) \
+        if config.clear else start_workers(TrialWorker, (config,), count, options.ray)
     progress = Progress(total, total - len(todo), "trial", "bench", options.show_progress)
     pending: dict[Future, tuple[int, int]] = {}
     queue = iter(todo)
