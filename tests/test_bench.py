@@ -460,6 +460,26 @@ def test_clearing_a_quick_bin_counts_what_landed_in_the_tray(tmp_path, capsys):
                                show_progress=False))
 
 
+def test_the_rate_is_reported_by_third_of_the_bin_as_it_empties():
+    def grasp(start, landed):
+        return {"outcome": "ONE" if landed else "NONE", "failure": None, "lifted": landed,
+                "held": landed, "resting": 0, "held_decided": landed, "recoveries": [],
+                "disposition": "DELIVERED" if landed else "EMPTY", "landed": landed,
+                "started_at": start, "execution_s": 10.0, "compute_s": 1.0}
+
+    # 6 parts: two delivered by 22 s, four by 56 s, five when it ended at 70 s, one left.
+    run = {"method": "m", "delivered": 5, "left_in_bin": 1, "lost": 0, "sim_s": 70.0,
+           "compute_s": 6.0, "grasps": [grasp(0, 1), grasp(12, 1), grasp(24, 0), grasp(34, 1),
+                                        grasp(46, 1), grasp(58, 1)]}
+    first, middle, last = figures([run])["parts_per_hour_by_third"]
+    assert first == pytest.approx(2 / (24 / 3600))  # 22 s simulated + 2 s computing
+    assert middle == pytest.approx(2 / (37 / 3600))  # 22 -> 56 s, three grasps' computing
+    assert last == pytest.approx(1 / (15 / 3600))  # 56 -> 70 s, one grasp's
+    old = {**run, "grasps": [{k: v for k, v in g.items() if k != "started_at"}
+                             for g in run["grasps"]]}
+    assert figures([old])["parts_per_hour_by_third"] is None  # made before starts were kept
+
+
 def test_a_clearing_says_why_it_ended():
     gave_up = PickRecord(index=7, failure=FailureKind.GAVE_UP,
                          reason="5 grasps in a row delivered nothing, 2 stirs since the last "

@@ -8,7 +8,8 @@ while a held part still rested on the pile (the wrist then reads light); grasps 
 that found nothing to pick) per delivered part; shakes, put-backs and stirs of the bin; parts
 left in the bin and lost (in neither bin nor tray, by where they fell from and the planner's
 mode then); parts delivered ÷ parts in the bins (``cleared`` in the summary: not the share of
-bins emptied); delivered parts per hour of simulated time plus computation; each clearing
+bins emptied); delivered parts per hour of simulated time plus computation, and over each third of
+the bins as they empty; each clearing
 that left parts in its bin, and why it ended. Rates come with 95 % bootstrap intervals over
 bins.
 """
@@ -115,12 +116,53 @@ def _interval(runs: Sequence[dict], key: str) -> list[float] | None:
         if values else None
 
 
+def _thirds(run: dict) -> list[tuple[int, float, int]] | None:
+    """(parts delivered, hours, grasps) in each third of a bin: a grasp belongs to the third
+    of the next part to be delivered (the bin's parts numbered in the order they leave), a
+    third ends with its last grasp (the last third with the clearing), and its time is
+    simulated time plus its grasps' computation. ``None`` for a run made before grasps
+    recorded their start."""
+    grasps = run["grasps"]
+    if any(g.get("started_at") is None and g["outcome"] != "FAILED" for g in grasps):
+        return None
+    parts = max(run["delivered"] + run["left_in_bin"] + run["lost"], 1)
+    delivered, compute, count, ends = 0, [0.0] * 3, [0] * 3, [0.0] * 3
+    landed = [0] * 3
+    for g in grasps:
+        third = min(2, 3 * delivered // parts)
+        landed[third] += g["landed"]
+        compute[third] += g["compute_s"]
+        count[third] += 1
+        delivered += g["landed"]
+        if g.get("started_at") is not None:
+            ends[third] = g["started_at"] + g["execution_s"]
+    ends[2] = run["sim_s"]
+    starts = [0.0, max(ends[0], 0.0), max(ends[:2])]
+    return [(landed[k], (max(ends[k], starts[k]) - starts[k] + compute[k]) / 3600, count[k])
+            for k in range(3)]
+
+
+def _rate_by_third(runs: Sequence[dict]) -> list[float | None] | None:
+    """Delivered parts per hour over the first, middle and last third of each bin, pooled
+    over ``runs``: how the rate changes as the bin empties."""
+    split = [t for run in runs if (t := _thirds(run)) is not None]
+    if not split:
+        return None
+    rates = []
+    for k in range(3):
+        parts, hours = sum(t[k][0] for t in split), sum(t[k][1] for t in split)
+        grasped = any(t[k][2] for t in split)
+        rates.append(parts / hours if grasped and hours > 0 else None)
+    return rates
+
+
 def figures(runs: Sequence[dict]) -> dict:
     """Counts, rates and intervals of one method's clearings."""
     counts = _counts(runs)
     intervals = {f"{key}_ci": _interval(runs, key)
                  for key in ("exactly_one_rate", "several_rate", "cleared", "parts_per_hour")}
-    return {**counts, **_rates(counts), **intervals}
+    return {**counts, **_rates(counts), **intervals,
+            "parts_per_hour_by_third": _rate_by_third(runs)}
 
 
 def summarize_clearing(trials: Sequence[dict], parts: Sequence[str], methods: Sequence[str],
@@ -170,6 +212,17 @@ def _lost_lines(by_method: dict, methods: Sequence[str]) -> list[str]:
         if lines else []
 
 
+def _third_lines(by_method: dict, methods: Sequence[str]) -> list[str]:
+    """Each method's rate over the first, middle and last third of its bins."""
+    def rate(value: float | None) -> str:
+        return "–" if value is None else f"{value:.0f}"
+
+    lines = [f"- {m}: " + ", ".join(map(rate, by_method[m]["parts_per_hour_by_third"]))
+             for m in methods if by_method[m].get("parts_per_hour_by_third")]
+    return ["", "Parts per hour as the bin empties (its first, middle and last third of parts "
+            "delivered):", "", *lines] if lines else []
+
+
 def _unfinished_lines(trials: Sequence[dict]) -> list[str]:
     """Each clearing that left parts in the bin, and why it ended (a run made before the
     reason was recorded gives the run's end)."""
@@ -194,11 +247,13 @@ def write_clear_report(directory: Path, trials: Sequence[dict], summary: dict,
              "## All parts", "", *_HEADER,
              *[_row(m, summary["overall"][m]) for m in methods]]
     lines += _lost_lines(summary["overall"], methods)
+    lines += _third_lines(summary["overall"], methods)
     lines += _unfinished_lines(trials)
     for part in parts:
         lines += ["", f"## {part}", "", *_HEADER,
                   *[_row(m, summary["by_part"][part][m]) for m in methods]]
         lines += _lost_lines(summary["by_part"][part], methods)
+        lines += _third_lines(summary["by_part"][part], methods)
     for note in summary.get("notes", []):
         lines += ["", f"Note: {note}"]
     report = directory / "clear_report.md"
