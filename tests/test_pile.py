@@ -78,10 +78,13 @@ def test_a_pile_that_cannot_be_made_or_picked_is_refused_before_any_simulation()
         check_pile(with_pile(scale=6.0))
     with pytest.raises(TangleDrakeError, match=r"more than the gripper's 0\.1 N fingers"):
         check_pile(with_pile(), GripperSpec(grip_force=0.1))
-    with pytest.raises(TangleDrakeError, match=r"500 parts needs about .* times the bin's"):
-        check_pile(with_pile(count=500))
-    (warning,) = check_pile(with_pile(count=100))
-    assert "rise above the walls" in warning
+    with pytest.raises(TangleDrakeError, match=r"1200 parts would fill .* times its 8 cm walls"):
+        check_pile(with_pile(count=1200))
+    # tools/bin_fill.py: 100 U-hooks top out at 7.6 cm in this bin, 40 J-hooks at 9.0 cm
+    assert check_pile(with_pile(count=100)) == []
+    (warning,) = check_pile(with_pile("j_hook", count=40))
+    assert "above the bin's 8 cm walls" in warning
+
 
 
 def test_bench_refuses_a_part_too_large_for_the_bin_up_front(tmp_path):
