@@ -25,10 +25,10 @@ from tangle_drake.bench.results import IDENTITY_FILE, RESULTS_FILE
 from tangle_drake.bench.runner import BenchOptions, plan, run_bench
 from tangle_drake.bench.trials import classify, method_seed, pile_seed
 from tangle_drake.cli import main
-from tangle_drake.episode.run import PickRun, RunEnd
 from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.common.failures import FailureKind
 from tangle_drake.common.paths import diagrams_dir, shown_path
+from tangle_drake.episode.run import PickRun, RunEnd
 from tangle_drake.perception.crops import CropSpec
 from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import LiftMonitor, Outcome, PickRecord, TrueCount, classify_lift
