@@ -29,6 +29,28 @@ def test_the_dense_bin_differs_from_the_benchmarks_only_in_its_pile():
     assert changed == ["-     count: 15", "+     count: 40"]
 
 
+def test_a_part_alone_fills_the_pile_with_its_own_count():
+    """A deep bin holds fewer long parts than short ones: where one part replaces the pile's
+    (the benchmark's --parts, the demo's --part, collect, teach), ``part_counts`` sizes it."""
+    from dataclasses import replace
+
+    from tangle_drake.bench.trials import BenchConfig, PartSpec, part_scenario
+    from tangle_drake.episode.demo import with_part
+
+    text = "pile: {parts: [{part: u_hook, count: 30}], part_counts: {j_hook: 12}}"
+    scenario = parse_scenario(text)
+    assert [(p.part, p.count) for p in scenario.pile.alone("j_hook").parts] == [("j_hook", 12)]
+    assert [(p.part, p.count) for p in scenario.pile.alone("s_hook").parts] == [("s_hook", 30)]
+    assert scenario.pile.alone("j_hook", count=3).parts[0].count == 3  # a count given wins
+    assert with_part(scenario, "j_hook").pile.total_count == 12
+    config = BenchConfig(text, (), {}, "floating", 0, None)
+    assert part_scenario(config, PartSpec("j_hook", "j_hook", 1.0)).pile.total_count == 12
+    assert part_scenario(replace(config, pile_size=2),
+                         PartSpec("j_hook", "j_hook", 1.0)).pile.total_count == 2
+    with pytest.raises(TangleDrakeError, match=r"pile\.part_counts\[j_hook\]"):
+        parse_scenario("pile: {part_counts: {j_hook: 0}}")
+
+
 def test_values_from_yaml_override_defaults():
     scenario = parse_scenario("""
 bin: {center: [0.5, 0.1], inner_size: [0.3, 0.3]}

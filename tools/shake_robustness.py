@@ -44,7 +44,7 @@ from tangle_drake.episode.episode import Episode
 from tangle_drake.episode.run import PickEpisode, RunEnd
 from tangle_drake.pick.load_path import GRIPPER_BODY, LoadPathMonitor
 from tangle_drake.pick.planner import Mode
-from tangle_drake.scenario import PartCount, Scenario, load_scenario
+from tangle_drake.scenario import Scenario, load_scenario
 from tangle_drake.selection.methods import Method, MethodRun
 from tangle_drake.station import build_station
 from tangle_drake.station.perturb import ContactScaler
@@ -247,8 +247,7 @@ def main() -> int:
     try:
         for part in args.parts:
             scenario = load_scenario(args.scenario)
-            scenario = replace(scenario, pile=replace(scenario.pile, parts=[
-                PartCount(part, scenario.pile.total_count)]))
+            scenario = replace(scenario, pile=scenario.pile.alone(part))
             fine_config = copy.deepcopy(scenario.plant_config)
             fine_config.time_step = 0.001
             fine = replace(scenario, plant_config=fine_config)

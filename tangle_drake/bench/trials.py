@@ -22,7 +22,7 @@ from tangle_drake.bench.gallery import TILE_KEY, caption, failure_kind, timed_ti
 from tangle_drake.common.failures import FailureKind
 from tangle_drake.episode.episode import Episode
 from tangle_drake.pick.outcome import Outcome, PickRecord
-from tangle_drake.scenario import PartCount, Scenario, parse_scenario
+from tangle_drake.scenario import Scenario, parse_scenario
 from tangle_drake.selection.methods import Method, MethodRun
 from tangle_drake.station.perturb import PhysicsSpread, PickPhysics
 
@@ -61,7 +61,7 @@ class BenchConfig:
     mode: str = "floating"
     seed: int = 0
     pile_size: int | None = None
-    """Parts per pile; ``None``: the scenario's count."""
+    """Parts per pile; ``None``: the scenario's (``PileConfig.alone``)."""
     clear: bool = False
     """Clear whole bins (:mod:`.clearing`) instead of one pick per method and pile."""
     open_loop: bool = False
@@ -97,9 +97,8 @@ def trial_physics(config: BenchConfig, part: str, trial: int) -> PickPhysics | N
 def part_scenario(config: BenchConfig, spec: PartSpec) -> Scenario:
     """The run's scenario with its pile made of ``spec`` only."""
     scenario = parse_scenario(config.scenario_text, source="the benchmark scenario")
-    count = config.pile_size or scenario.pile.total_count
-    return replace(scenario, pile=replace(scenario.pile, parts=[
-        PartCount(spec.part, count, spec.mesh_scale)]))
+    return replace(scenario, pile=scenario.pile.alone(spec.part, spec.mesh_scale,
+                                                      config.pile_size))
 
 
 def classify(record: PickRecord | None) -> tuple[str, str | None]:

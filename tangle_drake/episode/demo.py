@@ -38,7 +38,7 @@ from tangle_drake.pick.pictures import PickPictures
 from tangle_drake.pick.planner import PickSettings
 from tangle_drake.planning.motions import motion_for
 from tangle_drake.robot_model.gripper import DEFAULT_GRIPPER
-from tangle_drake.scenario import PartCount, Scenario
+from tangle_drake.scenario import Scenario
 from tangle_drake.scenario.files import ScenarioSource, scenario_source
 from tangle_drake.scenario.hardware import IN_PROCESS_URL
 from tangle_drake.selection.choice import TangleChoice, model_part_notice, resolve_tangle_choice
@@ -87,12 +87,12 @@ class DemoOptions:
 
 
 def with_part(scenario: Scenario, part: str | None) -> Scenario:
-    """``scenario`` with its pile made of ``part`` only (as many as before); checks the part."""
+    """``scenario`` with its pile made of ``part`` only (:meth:`PileConfig.alone`); checks the
+    part."""
     if part is None:
         return scenario
     load_part(part)  # a clear TangleDrakeError for an unknown part or a bad mesh
-    pile = replace(scenario.pile, parts=[PartCount(part, scenario.pile.total_count, 1.0)])
-    return replace(scenario, pile=pile)
+    return replace(scenario, pile=scenario.pile.alone(part))
 
 
 def run_demo(options: DemoOptions, say: Callable[[str], None] = print) -> list[PickRecord]:

@@ -9,7 +9,7 @@ float" alone does not tell a user which of fifty lines to fix.
 # No `from __future__ import annotations`: Drake's YAML loader needs real field types.
 
 import typing
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from pydrake.common.yaml import yaml_load_typed
@@ -98,8 +98,14 @@ class PileConfig:
     """Deeper interpenetration than this marks a part as badly placed, m."""
     max_redraws: int = 3
     """How many times parts that ended outside the bin are dropped again."""
+    part_counts: dict[str, int] = field(default_factory=dict)
+    """Part -> how many make the pile where that part alone replaces the pile's parts (the
+    benchmark's ``--parts``, the demo's ``--part``, ``collect`` and ``teach``): a deep bin
+    holds fewer long parts than short ones. A part not named keeps the pile's total count."""
 
     def validate(self, where: str) -> None:
+        for part, count in self.part_counts.items():
+            _require(count >= 1, f"{where}.part_counts[{part}]", "must be >= 1")
         for i, entry in enumerate(self.parts):
             _require(entry.count >= 0, f"{where}.parts[{i}].count", "must be >= 0")
             _require(entry.mesh_scale > 0, f"{where}.parts[{i}].mesh_scale", "must be positive")
@@ -113,6 +119,12 @@ class PileConfig:
     @property
     def total_count(self) -> int:
         return sum(entry.count for entry in self.parts)
+
+    def alone(self, part: str, mesh_scale: float = 1.0, count: int | None = None) -> "PileConfig":
+        """This pile made of ``part`` alone: ``count`` of it, else its ``part_counts`` entry,
+        else as many as the pile held."""
+        count = count or self.part_counts.get(part, self.total_count)
+        return replace(self, parts=[PartCount(part, count, mesh_scale)])
 
 
 PICK_TIME_STEP_MAX = 0.003

@@ -40,7 +40,7 @@ from tangle_drake.pick import pick_log
 from tangle_drake.pick.outcome import Outcome
 from tangle_drake.pick.recovery import Verdict
 from tangle_drake.planning.motions import scenario_mode
-from tangle_drake.scenario import PartCount, Scenario, parse_scenario
+from tangle_drake.scenario import Scenario, parse_scenario
 from tangle_drake.selection.methods import Method, MethodRun
 from tangle_drake.station.perturb import PhysicsSpread, PickPhysics
 from tangle_drake.tangle_data.seeds import depth_noise_rng, physics_rng, pile_seed
@@ -104,12 +104,11 @@ def pick_data_scenario(scenario_text: str, settings: PickDataSettings) -> Scenar
     """The scenario with its pile made of the part alone (its size kept unless set)."""
     settings.validate()
     scenario = parse_scenario(scenario_text, source="the pick-data scenario")
-    count = settings.parts_per_pile or scenario.pile.total_count
-    if count < 1:
+    pile = scenario.pile.alone(settings.part, settings.mesh_scale, settings.parts_per_pile)
+    if pile.total_count < 1:
         raise TangleDrakeError("the pick-data scenario's pile has no parts: pass "
                                "--parts-per-pile")
-    return replace(scenario, pile=replace(scenario.pile, parts=[
-        PartCount(settings.part, count, settings.mesh_scale)]))
+    return replace(scenario, pile=pile)
 
 
 PICK_SHARES = (("one", "one part"), ("tangled", "several"), ("none", "none"))

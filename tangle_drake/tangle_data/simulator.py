@@ -19,7 +19,7 @@ from tangle_drake.graspability import GraspabilityParams, GraspCandidate, bin_ro
 from tangle_drake.graspability import compute_candidates as graspability_candidates
 from tangle_drake.parts import load_part
 from tangle_drake.perception.crops import extract_crop
-from tangle_drake.scenario import PartCount, Scenario, parse_scenario
+from tangle_drake.scenario import Scenario, parse_scenario
 from tangle_drake.station import build_station, camera_model
 from tangle_drake.station.bin_model import inner_corners, inside_bin
 from tangle_drake.station.perturb import ContactScaler, Perturbation, jiggle_parts
@@ -38,8 +38,8 @@ from tangle_drake.tangle_data.settings import CollectSettings
 def data_scenario(scenario_text: str, settings: CollectSettings) -> Scenario:
     """The data scenario with its pile replaced by ``parts_per_pile`` copies of the part."""
     scenario = parse_scenario(scenario_text, source="the data scenario")
-    scenario.pile.parts = [PartCount(part=settings.part, count=settings.parts_per_pile,
-                                     mesh_scale=settings.mesh_scale)]
+    scenario.pile = scenario.pile.alone(settings.part, settings.mesh_scale,
+                                        settings.parts_per_pile)
     settings.validate(scenario.plant_config.time_step)
     return scenario
 

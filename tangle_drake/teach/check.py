@@ -213,6 +213,5 @@ def settle_verdict(check: PartCheck, report: PileReport) -> PartCheck:
 
 
 def scenario_of(scenario: Scenario, part: str | Path, mesh_scale: float = 1.0) -> Scenario:
-    """``scenario`` with its pile made of ``part`` alone, as many as it held."""
-    return replace(scenario, pile=replace(scenario.pile, parts=[
-        PartCount(str(part), scenario.pile.total_count, mesh_scale)]))
+    """``scenario`` with its pile made of ``part`` alone (:meth:`PileConfig.alone`)."""
+    return replace(scenario, pile=scenario.pile.alone(str(part), mesh_scale))
