@@ -75,3 +75,31 @@ def test_a_run_keeps_what_no_grasp_reaches_frozen_and_wakes_it_after():
 ])
 def test_what_wakes_and_what_freezes_the_pile(mode, grasp, frozen_for, frozen, rested, change):
     assert freeze_change(mode, grasp, frozen_for, frozen, rested) == change
+
+
+def test_the_agreement_check_compares_two_settings_and_resumes(tmp_path):
+    """The check as its users run it: a process, settings against settings, a file that a
+    second run resumes, and another run's settings refused."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    out = tmp_path / "check.jsonl"
+    command = [sys.executable, str(root / "tools" / "physics_agreement.py"), "--part", "c_ring",
+               "--piles", "1", "--top-k", "1", "--old", "simulation: {freeze_beyond_radii: 3}",
+               "--new", "simulation: {freeze_beyond_radii: 2}", "--out", str(out)]
+    first = subprocess.run(command, capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    identity, pile = map(json.loads, out.read_text().splitlines())
+    assert identity["old"] == ["simulation: {freeze_beyond_radii: 3}"]
+    (row,) = pile["ranks"]
+    assert {row["shipped"], row["rerun"], row["new"]} <= {"one part", "several", "none"}
+    assert "c_ring: 1 piles, 1 paired picks" in first.stdout
+    again = subprocess.run(command, capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert again.returncode == 0 and "pile 1/1" not in again.stderr  # nothing run again
+    assert len(out.read_text().splitlines()) == 2
+    other = subprocess.run(command[:-4] + ["--out", str(out)], capture_output=True, text=True,
+                           timeout=600, cwd=tmp_path)
+    assert other.returncode == 2 and "holds a check of other settings" in other.stderr

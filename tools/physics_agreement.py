@@ -2,9 +2,10 @@
 
 For each pile (the physical-pick data's pile seeds, not the benchmark's) and each of
 graspability's first ``--top-k`` candidates, picks three times from the same settled pile
-under the model's physics: with the scenario as shipped, the same with the grasp moved
-0.1 mm (the simulator's own re-run agreement: contact is chaotic, a pick's outcome is a draw),
-and with the scenario under ``--new`` overlays (e.g. ``simulation: {pick_time_step: 0.003,
+under the model's physics: with the scenario as shipped (or under ``--old`` overlays: the
+settings compared against), the same with the grasp moved 0.1 mm (the simulator's own re-run
+agreement: contact is chaotic, a pick's outcome is a draw), and with the scenario under
+``--new`` overlays (e.g. ``simulation: {pick_time_step: 0.003,
 freeze_beyond_radii: 2}``), with ``--fast`` as the physical-pick data's fast pick
 (:meth:`~tangle_drake.episode.episode.Episode.single_pick`). Prints, against the shipped
 pick, each one's outcome agreement with its 95 % interval; McNemar's test of a one-sided
@@ -30,7 +31,6 @@ from pathlib import Path
 
 from tangle_drake.common.errors import TangleDrakeError
 from tangle_drake.common.failures import FailureKind
-from tangle_drake.common.paths import diagrams_dir
 from tangle_drake.common.stats import paired_difference, wilson
 from tangle_drake.episode.episode import Episode, PhysicalPick
 from tangle_drake.pick.outcome import Outcome
@@ -125,8 +125,8 @@ def read_baseline(path: Path | None, identity: dict) -> dict[int, dict]:
         first, *piles = path.read_text().splitlines()
     except (OSError, ValueError) as error:
         raise TangleDrakeError(f"--baseline {path}: cannot read a check there") from error
-    same = ("part", "top_k", "seed")
-    if any(json.loads(first).get(key) != identity[key] for key in same):
+    same = ("part", "top_k", "seed", "old")
+    if any(json.loads(first).get(key) != identity.get(key) for key in same):
         raise TangleDrakeError(f"--baseline {path} checked other piles: {first}")
     return {pile["task"]: pile for pile in map(json.loads, piles)}
 
@@ -139,6 +139,9 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0, help="collection seed of the piles")
     parser.add_argument("--new", action="append", default=[], metavar="YAML",
                         help="an overlay of the new settings (repeatable)")
+    parser.add_argument("--old", action="append", default=[], metavar="YAML",
+                        help="an overlay of the settings compared against (repeatable; "
+                             "default: as shipped)")
     parser.add_argument("--fast", action="store_true",
                         help="the new side picks as collect --label pick does")
     parser.add_argument("--baseline", type=Path, default=None,
@@ -147,10 +150,10 @@ def main() -> int:
                         help="JSON lines: the settings, then one line per pile")
     args = parser.parse_args()
     identity = {"part": args.part, "top_k": args.top_k, "seed": args.seed, "new": args.new,
-                "fast": args.fast}
+                "fast": args.fast, **({"old": args.old} if args.old else {})}
     try:
         settings = PickDataSettings(args.part, top_k=args.top_k, seed=args.seed, physics=None)
-        shipped = pick_data_scenario((diagrams_dir() / PICK_SCENARIO).read_text(), settings)
+        shipped = pick_data_scenario(scenario_source(PICK_SCENARIO, args.old).text(), settings)
         new = pick_data_scenario(scenario_source(PICK_SCENARIO, args.new).text(), settings)
         floating = scenario_mode(shipped, "the scenario") == "floating"
         methods = [Method("graspability", "graspability")]
