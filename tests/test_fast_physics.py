@@ -100,6 +100,6 @@ def test_the_agreement_check_compares_two_settings_and_resumes(tmp_path):
     again = subprocess.run(command, capture_output=True, text=True, timeout=600, cwd=tmp_path)
     assert again.returncode == 0 and "pile 1/1" not in again.stderr  # nothing run again
     assert len(out.read_text().splitlines()) == 2
-    other = subprocess.run(command[:-4] + ["--out", str(out)], capture_output=True, text=True,
+    other = subprocess.run([*command[:-4], "--out", str(out)], capture_output=True, text=True,
                            timeout=600, cwd=tmp_path)
     assert other.returncode == 2 and "holds a check of other settings" in other.stderr
