@@ -2,9 +2,12 @@
 pile's top against the rim, the parts that stayed in, and the share of its bounding sphere a
 part takes up in the pile (what ``check_pile`` assumes as ``PACKING``).
 
-The top and the fill are the top camera's (``BinContents``: the highest point seen per 4 mm
-cell, the two highest cells left out), so they are what the picker sees. A bin holds its pile
-when the top of every pile stays below the rim.
+Heights are the top camera's (``BinContents``: the highest point seen per 4 mm cell), so they
+are what the picker sees: the top (the two highest cells left out), the surface's 90th and
+99th percentiles, the mean (the pile's volume over the floor). A part that lands leaning on a
+wall can stand up to the rim while the pile lies far below it, so a bin holds its pile when,
+in every pile, no part was taken out, no part's centre lies above the rim, and the surface's
+99th percentile stays below it.
 
     python tools/bin_fill.py --scenario diagrams/factory_bin.yaml --parts u_hook s_hook \\
         --counts 40 60 80 --piles 3 --out docs/results/factory_bin/fill.jsonl
@@ -38,6 +41,7 @@ def fill(scenario_files: list[str], part: str, count: int, piles: int) -> dict:
     camera = camera_model(scenario)
     sphere = 4 / 3 * np.pi * load_part(part).bounding_radius ** 3
     floor = float(np.prod(scenario.bin.inner_size))
+    rim = scenario.bin.floor_height + scenario.bin.wall_height
     rows = []
     for k in range(piles):
         cpu = time.process_time()
@@ -45,29 +49,39 @@ def fill(scenario_files: list[str], part: str, count: int, piles: int) -> dict:
         depth = station.GetOutputPort("camera.depth_image").Eval(
             settler.simulator.get_context()).data
         contents = bin_contents(depth, camera, scenario.bin)
-        volume = float(np.nan_to_num(contents.heights, nan=0.0).mean()) * floor
+        heights = np.nan_to_num(contents.heights, nan=0.0)
+        volume = float(heights.mean()) * floor
+        centres = station.part_poses(settler.simulator.get_context())[:, :3, 3]
         report = settled.report
         rows.append({"seed": report.seed, "in_bin": report.num_in_bin,
                      "parked": len(report.parked), "redrawn": len(report.redrawn),
                      "settled": report.settled, "top_m": round(contents.top(), 4),
+                     "p90_m": round(float(np.percentile(heights, 90)), 4),
+                     "p99_m": round(float(np.percentile(heights, 99)), 4),
+                     "centres_above_rim": int((centres[:, 2] > rim).sum()),
                      "mean_height_m": round(volume / floor, 4),
                      "packing": round(volume / (max(report.num_in_bin, 1) * sphere), 3),
                      "cpu_s": round(time.process_time() - cpu, 1)})
     return {"part": part, "count": count, "wall_m": scenario.bin.wall_height,
             "inner_size_m": list(scenario.bin.inner_size), "piles": rows,
-            "holds": all(r["top_m"] < scenario.bin.wall_height and not r["parked"]
-                         for r in rows)}
+            "holds": all(r["p99_m"] < scenario.bin.wall_height and not r["parked"]
+                         and not r["centres_above_rim"] for r in rows)}
 
 
 def line(result: dict) -> str:
     rows = result["piles"]
-    tops = [100 * r["top_m"] for r in rows]
+    def span(key: str) -> str:
+        values = [100 * r[key] for r in rows]
+        return f"{min(values):.1f}" if len(values) == 1 else \
+            f"{min(values):.1f}-{max(values):.1f}"
+
     return (f"{result['part']} x {result['count']}: "
             f"{sum(r['in_bin'] for r in rows)}/{result['count'] * len(rows)} in the bin "
             f"({sum(r['parked'] for r in rows)} parked, {sum(r['redrawn'] for r in rows)} "
-            f"redrawn) over {len(rows)} piles; top {min(tops):.1f}-{max(tops):.1f} cm of a "
-            f"{100 * result['wall_m']:.1f} cm wall, mean height "
-            f"{100 * np.mean([r['mean_height_m'] for r in rows]):.1f} cm; a part takes "
+            f"redrawn) over {len(rows)} piles; of a {100 * result['wall_m']:.1f} cm wall: "
+            f"top {span('top_m')} cm, surface 99 % {span('p99_m')}, 90 % {span('p90_m')}, "
+            f"mean {span('mean_height_m')} cm; "
+            f"{sum(r['centres_above_rim'] for r in rows)} centres above the rim; a part takes up "
             f"{np.mean([r['packing'] for r in rows]):.2f} of its bounding sphere; "
             f"{np.mean([r['cpu_s'] for r in rows]):.0f} CPU s a pile; "
             + ("holds it" if result["holds"] else "does NOT hold it"))
