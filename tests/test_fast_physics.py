@@ -97,6 +97,7 @@ def test_the_agreement_check_compares_two_settings_and_resumes(tmp_path):
     (row,) = pile["ranks"]
     assert {row["shipped"], row["rerun"], row["new"]} <= {"one part", "several", "none"}
     assert "c_ring: 1 piles, 1 paired picks" in first.stdout
+    assert "verdict: passes" in first.stdout or "verdict: fails" in first.stdout
     again = subprocess.run(command, capture_output=True, text=True, timeout=600, cwd=tmp_path)
     assert again.returncode == 0 and "pile 1/1" not in again.stderr  # nothing run again
     assert len(out.read_text().splitlines()) == 2

@@ -8,9 +8,11 @@ agreement: contact is chaotic, a pick's outcome is a draw), and with the scenari
 ``--new`` overlays (e.g. ``simulation: {pick_time_step: 0.003,
 freeze_beyond_radii: 2}``), with ``--fast`` as the physical-pick data's fast pick
 (:meth:`~tangle_drake.episode.episode.Episode.single_pick`). Prints, against the shipped
-pick, each one's outcome agreement with its 95 % interval; McNemar's test of a one-sided
-shift of the new settings on several-vs-not and none-vs-not (the tangled label is several);
-the parts that left the bin; and each one's CPU seconds per pick. One JSON line per pile in
+pick, each one's outcome agreement with its 95 % interval and the new settings' against the
+re-run's (McNemar); McNemar's test of a one-sided shift of the new settings on several-vs-not
+and none-vs-not (the tangled label is several); the parts that left the bin; each one's CPU
+seconds per pick; and the verdict: the new settings pass where none of those differs at
+p < 0.05 against them. One JSON line per pile in
 ``--out`` after a first line naming the settings: run the same command again to resume;
 other settings are refused. ``--baseline FILE``: an earlier check of the same part, piles and
 ``--top-k`` gives the shipped and re-run picks of its piles, so only the new ones run.
@@ -44,6 +46,8 @@ from tangle_drake.tangle_data.seeds import pile_seed
 RERUN_OFFSET = (1e-4, 0.0, 0.0)
 """The re-run's grasp error (x, y in m, degrees): 0.1 mm, far below anything a robot holds."""
 KINDS = ("shipped", "rerun", "new")
+ALPHA = 0.05
+"""A difference counts where a paired test gives p below this."""
 
 
 def escaped(rig: Episode, pick: PhysicalPick) -> int:
@@ -99,12 +103,25 @@ def report(identity: dict, piles: list[dict]) -> None:
         low, high = wilson(agree, n)
         print(f"  {kind} agrees with shipped: {agree}/{n} = {100 * agree / max(n, 1):.1f} % "
               f"[{100 * low:.1f}, {100 * high:.1f}]")
+    agreement = paired_difference([r["new"] == r["shipped"] for r in rows],
+                                  [r["rerun"] == r["shipped"] for r in rows])
+    print(f"  new against re-run agreement: {agreement.a_only} picks only new agrees, "
+          f"{agreement.b_only} only the re-run (McNemar p = {agreement.p_value:.3f})")
+    failures = []
+    if agreement.difference < 0 and agreement.p_value < ALPHA:
+        failures.append("agrees less often than the re-run")
     for outcome in (Outcome.SEVERAL, Outcome.NONE):
         test = paired_difference([r["new"] == outcome.value for r in rows],
                                  [r["shipped"] == outcome.value for r in rows])
         print(f"  {outcome.value} vs not: new {100 * test.rate_a:.1f} %, shipped "
               f"{100 * test.rate_b:.1f} % ({test.a_only} only new, {test.b_only} only shipped; "
               f"McNemar p = {test.p_value:.3f})")
+        if test.p_value < ALPHA:
+            failures.append(f"shifts {outcome.value} one way")
+    escapes = paired_difference([r["new_escaped"] > 0 for r in rows],
+                                [r["shipped_escaped"] > 0 for r in rows])
+    if escapes.difference > 0 and escapes.p_value < ALPHA:
+        failures.append("pushes parts out of the bin more often")
     for kind in KINDS:
         counts = Counter(r[kind] for r in rows)
         rates = ", ".join(f"{name} {100 * c / max(n, 1):.1f} %"
@@ -115,6 +132,9 @@ def report(identity: dict, piles: list[dict]) -> None:
     shipped = sum(r["shipped_cpu_s"] for r in rows)
     print(f"  speed: new {shipped / max(sum(r['new_cpu_s'] for r in rows), 1e-9):.2f}x shipped "
           "(CPU)")
+    print("  verdict: " + (f"fails: it {', '.join(failures)} (p < {ALPHA})" if failures else
+                           f"passes at p < {ALPHA}: agreement no lower than the re-run's, no "
+                           "one-sided shift, no more parts out of the bin"))
 
 
 def read_baseline(path: Path | None, identity: dict) -> dict[int, dict]:
