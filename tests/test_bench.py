@@ -445,6 +445,10 @@ def test_clearing_a_quick_bin_counts_what_landed_in_the_tray(tmp_path, capsys):
         (out / "clear_report.md").read_text().splitlines()[2]
     assert "exactly one part" in (out / "clear_report.md").read_text()
     assert "graspability: delivered" in capsys.readouterr().out
+    for g in run["grasps"]:  # a grasp that delivered reached into the bin, after a look
+        if g["landed"]:
+            assert g["in_bin_s"] > 0 and g["look_s"] > 0
+    assert "two arms could deliver at most" in (out / "clear_report.md").read_text()
     starts = [g["started_at"] for g in run["grasps"] if g["started_at"] is not None]
     assert starts == sorted(starts) and len(starts) >= 1
     if run["left_in_bin"]:  # why it stopped short is in the report

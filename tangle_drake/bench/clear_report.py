@@ -9,7 +9,8 @@ that found nothing to pick) per delivered part; shakes, put-backs and stirs of t
 left in the bin and lost (in neither bin nor tray, by where they fell from and the planner's
 mode then); parts delivered ÷ parts in the bins (``cleared`` in the summary: not the share of
 bins emptied); delivered parts per hour of simulated time plus computation, and over each third of
-the bins as they empty; each clearing
+the bins as they empty; how long the bin was busy per delivered part (a hand in it, a look)
+and the two-arm ceiling that sets; each clearing
 that left parts in its bin, and why it ended. Rates come with 95 % bootstrap intervals over
 bins.
 """
@@ -30,7 +31,7 @@ BOOTSTRAP_SAMPLES = 2000
 BOOTSTRAP_SEED = 0
 _FIELDS = ("part", "trial", "method", "index", "outcome", "failure", "lifted", "held",
            "resting", "held_decided", "weighed", "verdict", "recoveries", "disposition",
-           "landed", "started_at", "execution_s", "compute_s")
+           "landed", "started_at", "in_bin_s", "look_s", "execution_s", "compute_s")
 
 
 def _counts(runs: Sequence[dict]) -> dict:
@@ -156,13 +157,29 @@ def _rate_by_third(runs: Sequence[dict]) -> list[float | None] | None:
     return rates
 
 
+def _bin_busy(runs: Sequence[dict]) -> dict | None:
+    """Per delivered part, how long the bin was busy: a hand in it (fingertips below the rim),
+    and the looks (settling and perceiving, simulated, plus the computation's wall time); and
+    the rate two arms sharing the bin could reach at most, one busy while the other carries:
+    3600 ÷ (busy seconds per part). ``None`` for runs made before the times were recorded."""
+    grasps = [g for run in runs for g in run["grasps"]]
+    delivered = sum(run["delivered"] for run in runs)
+    if not delivered or any("in_bin_s" not in g for g in grasps):
+        return None
+    in_bin = sum(g["in_bin_s"] for g in grasps) / delivered
+    look = sum(g["look_s"] + g["compute_s"] for g in grasps) / delivered
+    return {"in_bin_s": in_bin, "look_s": look,
+            "compute_s": sum(g["compute_s"] for g in grasps) / delivered,
+            "two_arm_ceiling_per_hour": 3600 / (in_bin + look)}
+
+
 def figures(runs: Sequence[dict]) -> dict:
     """Counts, rates and intervals of one method's clearings."""
     counts = _counts(runs)
     intervals = {f"{key}_ci": _interval(runs, key)
                  for key in ("exactly_one_rate", "several_rate", "cleared", "parts_per_hour")}
     return {**counts, **_rates(counts), **intervals,
-            "parts_per_hour_by_third": _rate_by_third(runs)}
+            "parts_per_hour_by_third": _rate_by_third(runs), "bin_busy": _bin_busy(runs)}
 
 
 def summarize_clearing(trials: Sequence[dict], parts: Sequence[str], methods: Sequence[str],
@@ -223,6 +240,17 @@ def _third_lines(by_method: dict, methods: Sequence[str]) -> list[str]:
             "delivered):", "", *lines] if lines else []
 
 
+def _busy_lines(by_method: dict, methods: Sequence[str]) -> list[str]:
+    """Each method's bin-busy time per delivered part and the two-arm ceiling it sets."""
+    lines = [f"- {m}: {b['in_bin_s'] + b['look_s']:.1f} s: a hand in the bin "
+             f"{b['in_bin_s']:.1f} s, looks {b['look_s']:.1f} s ({b['compute_s']:.1f} s of it "
+             f"computing); two arms could deliver at most {b['two_arm_ceiling_per_hour']:.0f} "
+             "parts per hour"
+             for m in methods if (b := by_method[m].get("bin_busy"))]
+    return ["", "The bin busy per delivered part (while one arm carries a part away, another "
+            "could work the bin only outside these):", "", *lines] if lines else []
+
+
 def _unfinished_lines(trials: Sequence[dict]) -> list[str]:
     """Each clearing that left parts in the bin, and why it ended (a run made before the
     reason was recorded gives the run's end)."""
@@ -248,12 +276,14 @@ def write_clear_report(directory: Path, trials: Sequence[dict], summary: dict,
              *[_row(m, summary["overall"][m]) for m in methods]]
     lines += _lost_lines(summary["overall"], methods)
     lines += _third_lines(summary["overall"], methods)
+    lines += _busy_lines(summary["overall"], methods)
     lines += _unfinished_lines(trials)
     for part in parts:
         lines += ["", f"## {part}", "", *_HEADER,
                   *[_row(m, summary["by_part"][part][m]) for m in methods]]
         lines += _lost_lines(summary["by_part"][part], methods)
         lines += _third_lines(summary["by_part"][part], methods)
+        lines += _busy_lines(summary["by_part"][part], methods)
     for note in summary.get("notes", []):
         lines += ["", f"Note: {note}"]
     report = directory / "clear_report.md"

@@ -22,6 +22,7 @@ from pydrake.systems.framework import Context
 from tangle_drake.bench.trials import BenchConfig, PartSpec, method_seed, part_scenario, pile_seed
 from tangle_drake.episode.episode import Episode
 from tangle_drake.episode.run import POLL, PickRun, RunEnd
+from tangle_drake.pick.bin_time import BinTimes
 from tangle_drake.pick.diagram import PickDiagram
 from tangle_drake.pick.modes import Mode
 from tangle_drake.pick.outcome import PickRecord
@@ -77,8 +78,10 @@ class ClearWorker:
         progress = BinProgress(f"{name} ({run.name})", in_bin, self.progress_interval_s)
 
         def grasp(record: PickRecord) -> None:
-            now = tray_count(pick, episode.simulator.get_context())
-            rows.append(grasp_row(record, now - tray[0]))
+            context = episode.simulator.get_context()
+            now = tray_count(pick, context)
+            rows.append(grasp_row(record, now - tray[0],
+                                  pick.diagram.GetOutputPort("bin_times").Eval(context)))
             tray[0] = now
             progress.grasp(rows, episode.simulator.get_context().get_time(),
                            int(watch.in_bin.sum()))
@@ -192,8 +195,9 @@ def tray_count(pick: PickDiagram, context: Context) -> int:
         pick.tray.GetMyContextFromRoot(context))[0])
 
 
-def grasp_row(record: PickRecord, landed: int) -> dict:
-    """One grasp of a clearing as plain data: what it did, and what landed in the tray."""
+def grasp_row(record: PickRecord, landed: int, times: BinTimes) -> dict:
+    """One grasp of a clearing as plain data: what it did, what landed in the tray, and how
+    long it kept the bin busy (``times``: the pick diagram's ``bin_times``)."""
     return {"index": record.index, "outcome": record.outcome.name,
             "failure": None if record.failure is None else record.failure.value,
             "lifted": record.truth.lifted, "held": record.truth.held,
@@ -204,6 +208,8 @@ def grasp_row(record: PickRecord, landed: int) -> dict:
             "recoveries": [r.name for r in record.recoveries],
             "disposition": None if record.disposition is None else record.disposition.name,
             "landed": landed, "started_at": record.timing.started_at,
+            "in_bin_s": round(times.in_bin.get(record.index, 0.0), 3),
+            "look_s": round(times.look.get(record.index, 0.0), 3),
             "execution_s": round(record.timing.execution_s, 3),
             "compute_s": record.timing.compute_s}
 

@@ -29,6 +29,7 @@ from tangle_drake.parts import load_part
 from tangle_drake.parts.catalog import BUILTIN_PARTS, builtin_spec
 from tangle_drake.perception.camera import CameraModel
 from tangle_drake.pick.bin_contents import BinContentsSystem
+from tangle_drake.pick.bin_time import BinTime
 from tangle_drake.pick.load_path import LoadPathMonitor
 from tangle_drake.pick.outcome import LiftMonitor, TrayMonitor
 from tangle_drake.pick.payload import (
@@ -274,6 +275,13 @@ def build_pick_diagram(scenario: Scenario, motion: Motion, selection: SelectionW
             tray = builder.AddNamedSystem("tray_monitor (sim only)",
                                           TrayMonitor(station.plant, scenario.tray))
             builder.Connect(poses, tray.GetInputPort("body_poses"))
+    bin_time = builder.AddNamedSystem("bin_time", BinTime(motion, scenario.bin,
+                                                          planner_settings.update_period))
+    builder.Connect(station.GetOutputPort(motion.measured_port),
+                    bin_time.GetInputPort(motion.measured_port))
+    for port in ("mode", "current_pick"):
+        builder.Connect(planner.GetOutputPort(port), bin_time.GetInputPort(port))
+    builder.ExportOutput(bin_time.GetOutputPort("bin_times"), "bin_times")
     builder.ExportOutput(planner.GetOutputPort("mode"), "mode")
     builder.ExportOutput(planner.GetOutputPort("picks"), "picks")
     builder.ExportOutput(planner.GetOutputPort("current_pick"), "current_pick")

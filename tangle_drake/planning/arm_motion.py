@@ -115,6 +115,10 @@ class ArmMotion:
     def hold_command(self, measured: np.ndarray) -> np.ndarray:
         return np.asarray(measured[:_NUM_JOINTS], float).copy()
 
+    def tool_height(self, measured: np.ndarray) -> float:
+        q = self.model.full_q(np.asarray(measured[:_NUM_JOINTS], float))
+        return float(self.model.tcp_pose(q).translation()[2])
+
     def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray,
                   tips_above: float | None = None) -> PickMotion:
         """Plan the grasp or its 180° twin, the one nearer the current wrist angle first."""

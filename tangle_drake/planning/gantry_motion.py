@@ -73,6 +73,9 @@ class GantryMotion:
     def hold_command(self, measured: np.ndarray) -> np.ndarray:
         return np.asarray(measured[:4], float).copy()
 
+    def tool_height(self, measured: np.ndarray) -> float:
+        return float(measured[2])  # the gantry's z is T's (command_for)
+
     def command_for(self, X_WT: RigidTransform, yaw_near: float) -> np.ndarray:
         """Gantry coordinates putting T at ``X_WT``, yaw the twin nearer ``yaw_near``."""
         if X_WT.rotation().col(2)[2] > -0.999:

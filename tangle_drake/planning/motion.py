@@ -100,6 +100,9 @@ class Motion(Protocol):
     def hold_command(self, measured: np.ndarray) -> np.ndarray:
         """The command that keeps the manipulator where ``measured`` says it is."""
 
+    def tool_height(self, measured: np.ndarray) -> float:
+        """The world height of the tool centre (T) where ``measured`` puts it, m."""
+
     def plan_pick(self, X_WT: np.ndarray, measured: np.ndarray,
                   tips_above: float | None = None) -> PickMotion:
         """The whole pick for tool pose ``X_WT`` from the state ``measured``, the lift taking
