@@ -98,3 +98,41 @@ def test_bench_refuses_a_part_too_large_for_the_bin_up_front(tmp_path):
     big.write_text(text)
     with pytest.raises(TangleDrakeError, match="too large for the bin"):
         plan(BenchOptions(scenario=str(big), workers=1, methods=["graspability"]))
+
+
+def test_parts_dropped_above_the_rim_of_a_full_bin_keep_inside_its_walls():
+    """``pile.drop_inside_walls``: a part placed higher than the rim keeps its bounding radius
+    inside the walls (none lands hanging on the rim); lower ones use the whole floor from the
+    same draws, so a pile that never rises above the rim does not change."""
+    from dataclasses import replace
+
+    from pydrake.systems.analysis import Simulator
+
+    from tangle_drake.station import build_station
+    from tangle_drake.station.pile import _Placer
+
+    radius = 0.04
+
+    def placements(wall: float, margin: float) -> tuple[np.ndarray, object]:
+        scenario = load_scenario(diagrams_dir() / "pile_only.yaml")
+        scenario = replace(scenario, bin=replace(scenario.bin, wall_height=wall))
+        station = build_station(scenario)
+        body = station.pile_bodies[0]
+        root = Simulator(station).get_mutable_context()
+        placer = _Placer(station.plant, root, scenario.bin, station.pile_bodies, margin)
+        placer.stage(station.pile_bodies)
+        rng = np.random.default_rng(3)
+        found = []
+        for _ in range(60):
+            placer.place(body, rng)
+            found.append(station.plant.GetFreeBodyPose(placer.context, body).translation())
+        return np.array(found), scenario.bin
+
+    inside, bin_config = placements(0.02, radius)  # a low rim: many land above it
+    offset = np.abs(inside[:, :2] - bin_config.center)
+    high = inside[:, 2] > bin_config.floor_height + bin_config.wall_height
+    assert high.any()
+    assert np.all(offset[high] <= np.asarray(bin_config.inner_size) / 2 - radius + 1e-9)
+    assert offset[~high].max() > offset[high].max()  # below it, the whole floor
+    deep, _ = placements(0.5, radius)  # nothing above the rim: the same as without
+    np.testing.assert_array_equal(deep, placements(0.5, 0.0)[0])

@@ -98,6 +98,10 @@ class PileConfig:
     """Deeper interpenetration than this marks a part as badly placed, m."""
     max_redraws: int = 3
     """How many times parts that ended outside the bin are dropped again."""
+    drop_inside_walls: bool = False
+    """Parts dropped from higher than the rim (a full, deep bin) keep their bounding radius
+    inside the walls, so none lands hanging on the rim; lower ones fall anywhere over the
+    floor, as always."""
     part_counts: dict[str, int] = field(default_factory=dict)
     """Part -> how many make the pile where that part alone replaces the pile's parts (the
     benchmark's ``--parts``, the demo's ``--part``, ``collect`` and ``teach``): a deep bin

@@ -172,7 +172,9 @@ def _drop(simulator: Simulator, station: SimulatedStation, bin_config: BinConfig
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
 
-    placer = _Placer(plant, root, bin_config, bodies)
+    margin = max(load_part(entry.part, mesh_scale=entry.mesh_scale).bounding_radius
+                 for entry in pile_config.parts) if pile_config.drop_inside_walls else 0.0
+    placer = _Placer(plant, root, bin_config, bodies, margin)
     placer.stage(bodies)
     to_drop = list(bodies)
     for round_index in range(pile_config.max_redraws + 1):
@@ -203,8 +205,10 @@ class _Placer:
     """Places parts at collision-free random poses above the bin (or out of the way)."""
 
     def __init__(self, plant: MultibodyPlant, root: Context,
-                 bin_config: BinConfig, bodies: list[Body]) -> None:
+                 bin_config: BinConfig, bodies: list[Body], margin_above_rim: float) -> None:
         self.plant = plant
+        self.margin_above_rim = margin_above_rim
+        """A part placed higher than the rim keeps its centre this far inside the walls."""
         self.root = root
         self.context = plant.GetMyMutableContextFromRoot(root)
         self.bin = bin_config
@@ -231,10 +235,13 @@ class _Placer:
         half = np.asarray(self.bin.inner_size) / 2
         center = np.asarray(self.bin.center)
         low = self.bin.floor_height + 0.01
+        rim = self.bin.floor_height + self.bin.wall_height
+        inside = np.clip(1 - self.margin_above_rim / half, 0.0, 1.0)
         for band in range(200):
             for _ in range(_PLACEMENT_TRIES):
-                xy = center + rng.uniform(-half, half)
+                xy = rng.uniform(-half, half)
                 z = low + (band + rng.uniform()) * _BAND_HEIGHT
+                xy = center + (xy * inside if z > rim else xy)
                 rotation = RotationMatrix(_random_quaternion(rng))
                 self._set(body, RigidTransform(rotation, [xy[0], xy[1], z]))
                 if not self._collides(body):
