@@ -164,10 +164,12 @@ def _bin_busy(runs: Sequence[dict]) -> dict | None:
     3600 ÷ (busy seconds per part). ``None`` for runs made before the times were recorded."""
     grasps = [g for run in runs for g in run["grasps"]]
     delivered = sum(run["delivered"] for run in runs)
-    if not delivered or any("in_bin_s" not in g for g in grasps):
+    if not delivered or not grasps or any("in_bin_s" not in g for g in grasps):
         return None
     in_bin = sum(g["in_bin_s"] for g in grasps) / delivered
     look = sum(g["look_s"] + g["compute_s"] for g in grasps) / delivered
+    if in_bin + look <= 0:
+        return None
     return {"in_bin_s": in_bin, "look_s": look,
             "compute_s": sum(g["compute_s"] for g in grasps) / delivered,
             "two_arm_ceiling_per_hour": 3600 / (in_bin + look)}
