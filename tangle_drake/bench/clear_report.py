@@ -8,11 +8,10 @@ while a held part still rested on the pile (the wrist then reads light); grasps 
 that found nothing to pick) per delivered part; shakes, put-backs and stirs of the bin; parts
 left in the bin and lost (in neither bin nor tray, by where they fell from and the planner's
 mode then); parts delivered ÷ parts in the bins (``cleared`` in the summary: not the share of
-bins emptied); delivered parts per hour of simulated time plus computation, and over each third of
-the bins as they empty; how long the bin was busy per delivered part (a hand in it, a look)
-and the two-arm ceiling that sets; each clearing
-that left parts in its bin, and why it ended. Rates come with 95 % bootstrap intervals over
-bins.
+bins emptied); delivered parts per hour of simulated time plus computation, and over each
+third of the bins as they empty; how long the bin was busy per delivered part (a hand in it,
+a look) and the two-arm ceiling that sets; each clearing that left parts in its bin, and why
+it ended. Rates come with 95 % bootstrap intervals over bins.
 """
 
 from __future__ import annotations
@@ -138,7 +137,7 @@ def _thirds(run: dict) -> list[tuple[int, float, int]] | None:
         if g.get("started_at") is not None:
             ends[third] = g["started_at"] + g["execution_s"]
     ends[2] = run["sim_s"]
-    starts = [0.0, max(ends[0], 0.0), max(ends[:2])]
+    starts = [0.0, ends[0], max(ends[:2])]
     return [(landed[k], (max(ends[k], starts[k]) - starts[k] + compute[k]) / 3600, count[k])
             for k in range(3)]
 

@@ -83,8 +83,7 @@ class ClearWorker:
             rows.append(grasp_row(record, now - tray[0],
                                   pick.diagram.GetOutputPort("bin_times").Eval(context)))
             tray[0] = now
-            progress.grasp(rows, episode.simulator.get_context().get_time(),
-                           int(watch.in_bin.sum()))
+            progress.grasp(rows, context.get_time(), int(watch.in_bin.sum()))
 
         rig.start(state, run)
         time_limit = SIM_TIME_PER_PART * max(in_bin, 1)

@@ -53,7 +53,6 @@ from tangle_drake.episode.run import (
 from tangle_drake.hardware.hardware_sim import HardwareSim
 from tangle_drake.hardware.loop import HardwareInTheLoop
 from tangle_drake.lcm_io.buses import network_bus_url
-from tangle_drake.parts import load_part
 from tangle_drake.perception.camera import CameraIntrinsics
 from tangle_drake.pick.diagram import build_pick_diagram, closed_loop_settings, pick_settings
 from tangle_drake.pick.outcome import Outcome, PickRecord, classify_lift
@@ -64,7 +63,7 @@ from tangle_drake.selection.methods import Method, MethodRun, selection_wiring
 from tangle_drake.station import SimulatedStation, build_station, camera_model
 from tangle_drake.station.bin_model import inside_bin
 from tangle_drake.station.perturb import ContactScaler, PickPhysics
-from tangle_drake.station.pile import PileSettler, SettledPile
+from tangle_drake.station.pile import PileSettler, SettledPile, largest_radius
 from tangle_drake.station.pile_freeze import FREEZE_BEYOND_RADII, PileFreeze, parts_beyond
 
 FLOATING_SIM_LIMIT = 20.0
@@ -140,9 +139,7 @@ class Episode:
         radii = scenario.simulation.freeze_beyond_radii or (PICK_DATA_FREEZE_RADII if fast
                                                             else None)
         if radii is not None:
-            self._reach = radii * max(
-                load_part(entry.part, mesh_scale=entry.mesh_scale).bounding_radius
-                for entry in scenario.pile.parts)
+            self._reach = radii * largest_radius(scenario.pile)
 
     @classmethod
     def on_hardware(cls, scenario: Scenario, method: Method, settings: PickSettings,

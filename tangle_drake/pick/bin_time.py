@@ -72,9 +72,10 @@ class BinTime(LeafSystem):
                              (times.pending[0] + in_bin, times.pending[1] + look))
         else:
             index = record.index
-            pending = times.pending if index not in times.in_bin else (0.0, 0.0)
-            times = BinTimes(
-                {**times.in_bin, index: times.in_bin.get(index, 0.0) + pending[0] + in_bin},
-                {**times.look, index: times.look.get(index, 0.0) + pending[1] + look},
-                (0.0, 0.0) if index not in times.in_bin else times.pending)
+            if index in times.in_bin:  # booked before: the pending time went to it then
+                before, pending = (times.in_bin[index], times.look[index]), times.pending
+            else:  # its first tick: what was booked to the next pick is its
+                before, pending = times.pending, (0.0, 0.0)
+            times = BinTimes({**times.in_bin, index: before[0] + in_bin},
+                             {**times.look, index: before[1] + look}, pending)
         state.get_mutable_abstract_state(self._state).set_value(times)

@@ -73,6 +73,12 @@ GRIP_FRICTION = 0.9
 """The finger pads' friction coefficient (the gripper model's): what the grip can hold."""
 
 
+def largest_radius(pile: PileConfig) -> float:
+    """The largest bounding radius among the pile's parts, m: how far a part reaches."""
+    return max(load_part(entry.part, mesh_scale=entry.mesh_scale).bounding_radius
+               for entry in pile.parts)
+
+
 def hull_volume(part: PartModel) -> float:
     """The volume of the part's convex hull, m³ (a part encloses a volume: ``load_part``
     refuses a flat or open mesh)."""
@@ -172,8 +178,7 @@ def _drop(simulator: Simulator, station: SimulatedStation, bin_config: BinConfig
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
 
-    margin = max(load_part(entry.part, mesh_scale=entry.mesh_scale).bounding_radius
-                 for entry in pile_config.parts) if pile_config.drop_inside_walls else 0.0
+    margin = largest_radius(pile_config) if pile_config.drop_inside_walls else 0.0
     placer = _Placer(plant, root, bin_config, bodies, margin)
     placer.stage(bodies)
     to_drop = list(bodies)
